@@ -1,0 +1,105 @@
+//! A pinhole camera and primary-ray rendering of any [`Solution`]: each pixel shows the radiance
+//! L = B/π (W/m²/sr) of the first surface its ray hits (a diffuse surface's radiance is its radiosity over π),
+//! averaged over jittered sub-pixel samples. Rows are rendered in parallel; sample positions derive from
+//! (seed, pixel), so the image does not depend on the thread count.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::{Accel, Ray, Rgb, Solution, sampling};
+
+/// A pinhole camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: DVec3,
+    /// A point it looks at.
+    pub target: DVec3,
+    /// Up direction (need not be orthogonal to the view direction).
+    pub up: DVec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f64,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl Camera {
+    /// Checks the camera is usable; the message names the field.
+    pub fn validate(&self) -> Result<(), crate::SceneError> {
+        let bad = |field: &str, message: &str| {
+            Err(crate::SceneError::Invalid { field: format!("camera.{field}"), message: message.into() })
+        };
+        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            return bad("eye/target/up", "coordinates must be finite numbers");
+        }
+        if (self.target - self.eye).length_squared() == 0.0 {
+            return bad("target", "must differ from eye");
+        }
+        if self.up.cross(self.target - self.eye).length_squared() == 0.0 {
+            return bad("up", "must not be parallel to the view direction");
+        }
+        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 179.0) {
+            return bad("fov", "vertical field of view must be between 0 and 179 degrees");
+        }
+        if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
+            return bad("width/height", "image size must be between 1 and 16384 pixels");
+        }
+        Ok(())
+    }
+
+    /// The ray through continuous pixel coordinates (x right, y down; pixel (i, j) covers [i, i+1) × [j, j+1)).
+    pub fn ray(&self, x: f64, y: f64) -> Ray {
+        let w = (self.target - self.eye).normalize();
+        let u = w.cross(self.up).normalize();
+        let v = u.cross(w);
+        let half_h = (0.5 * self.fov_y_deg.to_radians()).tan();
+        let half_w = half_h * self.width as f64 / self.height as f64;
+        let sx = (2.0 * x / self.width as f64 - 1.0) * half_w;
+        let sy = (1.0 - 2.0 * y / self.height as f64) * half_h;
+        Ray::new(self.eye, (w + sx * u + sy * v).normalize())
+    }
+}
+
+/// A linear RGB image, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, row-major.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    /// The pixel at column x, row y.
+    pub fn get(&self, x: u32, y: u32) -> Rgb {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// Renders the radiance B/π of `solution` seen through `camera`, `spp` jittered samples per pixel
+/// (1 = pixel centres). Rays that escape the scene are black.
+pub fn render_solution(accel: &Accel, camera: &Camera, solution: &dyn Solution, spp: u32, seed: u64) -> Image {
+    let (w, h) = (camera.width, camera.height);
+    let spp = spp.max(1);
+    let mut pixels = vec![Rgb::ZERO; (w * h) as usize];
+    pixels.par_chunks_mut(w as usize).enumerate().for_each(|(y, row)| {
+        for (x, px) in row.iter_mut().enumerate() {
+            let mut sum = Rgb::ZERO;
+            let mut r = sampling::rng(seed, (y as u64) * w as u64 + x as u64);
+            for s in 0..spp {
+                let (jx, jy) =
+                    if spp == 1 && s == 0 { (0.5, 0.5) } else { (sampling::uniform(&mut r), sampling::uniform(&mut r)) };
+                let ray = camera.ray(x as f64 + jx, y as f64 + jy);
+                if let Some(hit) = accel.intersect(&ray) {
+                    sum += solution.radiosity_at(hit.face, hit.point) / std::f64::consts::PI;
+                }
+            }
+            *px = sum / spp as f64;
+        }
+    });
+    Image { width: w, height: h, pixels }
+}

@@ -1,0 +1,118 @@
+//! Unoccluded form factor from a differential area at x (unit normal n) to a polygon P:
+//!
+//! F_{dA→P} = (1/2π) Σ_k γ_k · n·(r_k × r_{k+1}) / |r_k × r_{k+1}|
+//!
+//! with r_k the unit vectors from x to P's vertices and γ_k = angle(r_k, r_{k+1}) (Lambert's contour integral;
+//! Nishita & Nakamae 1985; Baum, Rushmeier & Winget 1989, eq. 3). P is first clipped to the receiver's upper
+//! half-space n·(y − x) ≥ 0 (Sutherland–Hodgman against one plane), so the result is exact for polygons that
+//! straddle the receiver's horizon. A polygon emits from its front only: if x lies behind or in P's plane the
+//! factor is 0. No singularity at contact: a point on P's edge or plane gives a finite answer.
+
+use glam::DVec3;
+
+use crate::Polygon;
+
+/// Form factor from the differential area at `x` with unit normal `n` to the front of `poly`, unoccluded.
+pub fn point_polygon(x: DVec3, n: DVec3, poly: &Polygon) -> f64 {
+    let pn = poly.vector_area();
+    let v = poly.vertices();
+    // One-sided source: x must be strictly in front of the polygon's plane.
+    if (x - v[0]).dot(pn) <= 0.0 {
+        return 0.0;
+    }
+    // Clip to the receiver's upper half-space, in coordinates relative to x.
+    let mut clipped = [DVec3::ZERO; 8];
+    let mut m = 0;
+    for k in 0..v.len() {
+        let a = v[k] - x;
+        let b = v[(k + 1) % v.len()] - x;
+        let (da, db) = (a.dot(n), b.dot(n));
+        if da >= 0.0 {
+            clipped[m] = a;
+            m += 1;
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            let t = da / (da - db);
+            clipped[m] = a + t * (b - a);
+            m += 1;
+        }
+    }
+    if m < 3 {
+        return 0.0;
+    }
+    contour_sum(n, &clipped[..m])
+}
+
+/// The contour integral without the half-space clip or the facing test: exact only when the whole polygon
+/// lies above the receiver's tangent plane and faces it. For tests and for callers that know both hold.
+pub fn point_polygon_unclipped(x: DVec3, n: DVec3, poly: &Polygon) -> f64 {
+    let rel: Vec<DVec3> = poly.vertices().iter().map(|&p| p - x).collect();
+    contour_sum(n, &rel)
+}
+
+fn contour_sum(n: DVec3, rel: &[DVec3]) -> f64 {
+    let mut s = 0.0;
+    for k in 0..rel.len() {
+        let a = rel[k].normalize_or_zero();
+        let b = rel[(k + 1) % rel.len()].normalize_or_zero();
+        let c = a.cross(b);
+        let cl = c.length();
+        if cl > 1e-300 {
+            let gamma = cl.atan2(a.dot(b));
+            s += gamma * n.dot(c) / cl;
+        }
+    }
+    // Vertices ordered counter-clockwise seen from the front give a negative sum seen from in front.
+    (s.abs() / (2.0 * std::f64::consts::PI)).min(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::dvec3;
+
+    #[test]
+    fn infinite_plane_limit_is_one() {
+        // A huge square facing down, at height 1 above an upward receiver: F → 1.
+        let s = 1e6;
+        let p = Polygon::quad(dvec3(-s, -s, 1.), dvec3(-s, s, 1.), dvec3(s, s, 1.), dvec3(s, -s, 1.));
+        let f = point_polygon(DVec3::ZERO, DVec3::Z, &p);
+        assert!((f - 1.0).abs() < 1e-5, "{f}");
+    }
+
+    #[test]
+    fn parallel_rectangle_corner_closed_form() {
+        // Differential area below the corner of a parallel a × b rectangle at height h (Howell B-3):
+        // F = (1/2π)[X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))], X = a/h, Y = b/h.
+        let corner = |x: f64, y: f64| {
+            (x / (1. + x * x).sqrt() * (y / (1. + x * x).sqrt()).atan()
+                + y / (1. + y * y).sqrt() * (x / (1. + y * y).sqrt()).atan())
+                / (2.0 * std::f64::consts::PI)
+        };
+        for (a, b, h) in [(1.0, 1.0, 1.0), (0.3, 2.0, 0.7), (5.0, 0.1, 2.0)] {
+            let p = Polygon::quad(dvec3(0., 0., h), dvec3(0., b, h), dvec3(a, b, h), dvec3(a, 0., h));
+            let f = point_polygon(DVec3::ZERO, DVec3::Z, &p);
+            let exact = corner(a / h, b / h);
+            assert!((f - exact).abs() < 1e-12 * exact.max(1.0), "{a} {b} {h}: {f} vs {exact}");
+        }
+    }
+
+    #[test]
+    fn back_facing_and_below_horizon_give_zero() {
+        let up = Polygon::quad(dvec3(0., 0., 1.), dvec3(1., 0., 1.), dvec3(1., 1., 1.), dvec3(0., 1., 1.));
+        assert_eq!(point_polygon(DVec3::ZERO, DVec3::Z, &up), 0.0); // its front faces away (+z)
+        let down = Polygon::quad(dvec3(0., 0., -1.), dvec3(0., 1., -1.), dvec3(1., 1., -1.), dvec3(1., 0., -1.));
+        assert_eq!(point_polygon(DVec3::ZERO, DVec3::Z, &down), 0.0); // below the horizon
+    }
+
+    #[test]
+    fn horizon_clipping_halves_a_symmetric_wall() {
+        // A vertical wall facing the receiver, centred on its horizon: the clipped half equals the factor of a
+        // wall that only spans the upper half.
+        let full = Polygon::quad(dvec3(1., -1., -1.), dvec3(1., -1., 1.), dvec3(1., 1., 1.), dvec3(1., 1., -1.));
+        let upper = Polygon::quad(dvec3(1., -1., 0.), dvec3(1., -1., 1.), dvec3(1., 1., 1.), dvec3(1., 1., 0.));
+        let a = point_polygon(DVec3::ZERO, DVec3::Z, &full);
+        let b = point_polygon(DVec3::ZERO, DVec3::Z, &upper);
+        assert!(a > 0.0 && (a - b).abs() < 1e-14, "{a} {b}");
+    }
+}

@@ -1,0 +1,38 @@
+//! # radlab-scene
+//!
+//! The ground every radlab method stands on: scenes (geometry in f64, diffuse reflectance and emission per
+//! face, an optional camera), their file formats and builtin generators, the shared visibility engine
+//! ([`Accel`], an obvhs BVH), form factors, sampling, evaluation points, element meshes, the [`Solver`] and
+//! [`Solution`] traits, and primary-ray rendering of any solution.
+//!
+//! Units: radiosity B and emission E are radiant exitance in W/m²; radiance L = B/π; RGB channels are
+//! independent. Reflectance lies in [0, 1). Nothing in this crate prints or writes files.
+
+pub mod accel;
+pub mod builtin;
+pub mod camera;
+pub mod elements;
+pub mod error;
+pub mod eval_points;
+pub mod form_factor;
+pub mod params;
+pub mod polygon;
+pub mod sampling;
+pub mod scene;
+pub mod solver;
+
+pub use accel::{Accel, AccelPreset, Hit, Ray};
+pub use camera::{Camera, Image, render_solution};
+pub use elements::{Element, ElementMesh, default_element_size};
+pub use error::{SceneError, SolveError};
+pub use eval_points::{EvalPoint, evaluation_points};
+pub use params::MethodParams;
+pub use polygon::Polygon;
+pub use scene::{Face, FaceId, Material, Scene, SceneBuilder, SceneWarnings};
+pub use solver::{PerFaceSolution, Solution, Solver, Stats, Step};
+
+/// Linear RGB triple (f64 per channel): radiosity, emission, reflectance.
+pub type Rgb = glam::DVec3;
+
+pub use glam;
+pub use builtin::builtin;
