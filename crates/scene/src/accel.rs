@@ -35,7 +35,11 @@ pub struct Ray {
 impl Ray {
     /// A ray of unlimited length.
     pub fn new(origin: DVec3, dir: DVec3) -> Self {
-        Self { origin, dir, tmax: f64::INFINITY }
+        Self {
+            origin,
+            dir,
+            tmax: f64::INFINITY,
+        }
     }
 }
 
@@ -93,7 +97,10 @@ pub struct Accel {
 
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Accel").field("triangles", &self.tris.len()).field("gap", &self.gap).finish()
+        f.debug_struct("Accel")
+            .field("triangles", &self.tris.len())
+            .field("gap", &self.gap)
+            .finish()
     }
 }
 
@@ -112,10 +119,18 @@ impl Accel {
         let mut tri_face = Vec::with_capacity(scene.faces.len() * 2);
         for (f, face) in scene.faces.iter().enumerate() {
             let v = |k: usize| to32(scene.vertices[face.indices[k] as usize]);
-            tris.push(Triangle { v0: v(0), v1: v(1), v2: v(2) });
+            tris.push(Triangle {
+                v0: v(0),
+                v1: v(1),
+                v2: v(2),
+            });
             tri_face.push(f as u32);
             if face.vertex_count() == 4 {
-                tris.push(Triangle { v0: v(0), v1: v(2), v2: v(3) });
+                tris.push(Triangle {
+                    v0: v(0),
+                    v1: v(2),
+                    v2: v(3),
+                });
                 tri_face.push(f as u32);
             }
         }
@@ -124,7 +139,11 @@ impl Accel {
         let bvh = build_cwbvh_from_tris(&tris, preset.params(), &mut build_time);
         let build_time = start.elapsed();
         let normals = scene.faces.iter().map(|f| f.normal).collect();
-        let plane_d = scene.faces.iter().map(|f| f.normal.dot(f.centroid)).collect();
+        let plane_d = scene
+            .faces
+            .iter()
+            .map(|f| f.normal.dot(f.centroid))
+            .collect();
         Self {
             bvh,
             tris,
@@ -169,7 +188,11 @@ impl Accel {
     fn bvh_ray(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> BvhRay {
         let o = Vec3A::from((origin - self.offset).as_vec3());
         let d = Vec3A::from(dir.as_vec3());
-        let tmax = if tmax.is_finite() { tmax as f32 } else { f32::INFINITY };
+        let tmax = if tmax.is_finite() {
+            tmax as f32
+        } else {
+            f32::INFINITY
+        };
         BvhRay::new(o, d, tmin as f32, tmax)
     }
 
@@ -184,7 +207,14 @@ impl Accel {
         self.closest(origin, dir, self.gap, f64::INFINITY, from)
     }
 
-    fn closest(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64, skip: FaceId) -> Option<Hit> {
+    fn closest(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+        skip: FaceId,
+    ) -> Option<Hit> {
         self.rays.fetch_add(1, Ordering::Relaxed);
         let ray = self.bvh_ray(origin, dir, tmin, tmax);
         let mut hit = RayHit::none();
@@ -210,7 +240,11 @@ impl Accel {
                 t = t64;
             }
         }
-        Some(Hit { face, t, point: origin + t * dir })
+        Some(Hit {
+            face,
+            t,
+            point: origin + t * dir,
+        })
     }
 
     /// Whether the segment between `p` and `q` is unobstructed, for points that may lie on surfaces: a gap

@@ -29,7 +29,10 @@ impl Camera {
     /// Checks the camera is usable; the message names the field.
     pub fn validate(&self) -> Result<(), crate::SceneError> {
         let bad = |field: &str, message: &str| {
-            Err(crate::SceneError::Invalid { field: format!("camera.{field}"), message: message.into() })
+            Err(crate::SceneError::Invalid {
+                field: format!("camera.{field}"),
+                message: message.into(),
+            })
         };
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
             return bad("eye/target/up", "coordinates must be finite numbers");
@@ -41,10 +44,16 @@ impl Camera {
             return bad("up", "must not be parallel to the view direction");
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 179.0) {
-            return bad("fov", "vertical field of view must be between 0 and 179 degrees");
+            return bad(
+                "fov",
+                "vertical field of view must be between 0 and 179 degrees",
+            );
         }
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
-            return bad("width/height", "image size must be between 1 and 16384 pixels");
+            return bad(
+                "width/height",
+                "image size must be between 1 and 16384 pixels",
+            );
         }
         Ok(())
     }
@@ -82,24 +91,40 @@ impl Image {
 
 /// Renders the radiance B/π of `solution` seen through `camera`, `spp` jittered samples per pixel
 /// (1 = pixel centres). Rays that escape the scene are black.
-pub fn render_solution(accel: &Accel, camera: &Camera, solution: &dyn Solution, spp: u32, seed: u64) -> Image {
+pub fn render_solution(
+    accel: &Accel,
+    camera: &Camera,
+    solution: &dyn Solution,
+    spp: u32,
+    seed: u64,
+) -> Image {
     let (w, h) = (camera.width, camera.height);
     let spp = spp.max(1);
     let mut pixels = vec![Rgb::ZERO; (w * h) as usize];
-    pixels.par_chunks_mut(w as usize).enumerate().for_each(|(y, row)| {
-        for (x, px) in row.iter_mut().enumerate() {
-            let mut sum = Rgb::ZERO;
-            let mut r = sampling::rng(seed, (y as u64) * w as u64 + x as u64);
-            for s in 0..spp {
-                let (jx, jy) =
-                    if spp == 1 && s == 0 { (0.5, 0.5) } else { (sampling::uniform(&mut r), sampling::uniform(&mut r)) };
-                let ray = camera.ray(x as f64 + jx, y as f64 + jy);
-                if let Some(hit) = accel.intersect(&ray) {
-                    sum += solution.radiosity_at(hit.face, hit.point) / std::f64::consts::PI;
+    pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, px) in row.iter_mut().enumerate() {
+                let mut sum = Rgb::ZERO;
+                let mut r = sampling::rng(seed, (y as u64) * w as u64 + x as u64);
+                for s in 0..spp {
+                    let (jx, jy) = if spp == 1 && s == 0 {
+                        (0.5, 0.5)
+                    } else {
+                        (sampling::uniform(&mut r), sampling::uniform(&mut r))
+                    };
+                    let ray = camera.ray(x as f64 + jx, y as f64 + jy);
+                    if let Some(hit) = accel.intersect(&ray) {
+                        sum += solution.radiosity_at(hit.face, hit.point) / std::f64::consts::PI;
+                    }
                 }
+                *px = sum / spp as f64;
             }
-            *px = sum / spp as f64;
-        }
-    });
-    Image { width: w, height: h, pixels }
+        });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
 }

@@ -44,11 +44,20 @@ impl ElementMesh {
         for f in 0..scene.faces.len() {
             face_start.push(elements.len() as u32);
             for polygon in scene.polygon(f).subdivide(element_size) {
-                elements.push(Element { face: f as u32, area: polygon.area(), centroid: polygon.centroid(), polygon });
+                elements.push(Element {
+                    face: f as u32,
+                    area: polygon.area(),
+                    centroid: polygon.centroid(),
+                    polygon,
+                });
             }
         }
         face_start.push(elements.len() as u32);
-        Self { elements, face_start, element_size }
+        Self {
+            elements,
+            face_start,
+            element_size,
+        }
     }
 
     /// Number of elements.

@@ -48,7 +48,9 @@ pub enum SolveError {
         message: String,
     },
     /// The method would need more memory than its budget allows.
-    #[error("{what} needs {needed_bytes} bytes ({needed_mib:.1} MiB) but the memory budget is {budget_bytes} bytes; {hint}")]
+    #[error(
+        "{what} needs {needed_bytes} bytes ({needed_mib:.1} MiB) but the memory budget is {budget_bytes} bytes; {hint}"
+    )]
     OverBudget {
         /// What is too large.
         what: String,
@@ -72,7 +74,10 @@ pub enum SolveError {
 impl SolveError {
     /// A parameter error.
     pub fn param(name: &str, message: impl Into<String>) -> Self {
-        Self::Parameter { name: name.into(), message: message.into() }
+        Self::Parameter {
+            name: name.into(),
+            message: message.into(),
+        }
     }
 
     /// An over-budget error for `needed` bytes against `budget` bytes.

@@ -25,7 +25,9 @@ pub struct EvalPoint {
 
 /// `count` evaluation points over the non-emitting faces, from `seed`. Empty if no face is non-emitting.
 pub fn evaluation_points(scene: &Scene, count: usize, seed: u64) -> Vec<EvalPoint> {
-    let faces: Vec<FaceId> = (0..scene.faces.len()).filter(|&f| !scene.material(f).is_emitter()).collect();
+    let faces: Vec<FaceId> = (0..scene.faces.len())
+        .filter(|&f| !scene.material(f).is_emitter())
+        .collect();
     let mut cum = Vec::with_capacity(faces.len() + 1);
     let mut total = 0.0;
     cum.push(0.0);
@@ -45,7 +47,12 @@ pub fn evaluation_points(scene: &Scene, count: usize, seed: u64) -> Vec<EvalPoin
             let f = faces[k];
             let u1 = ((a - cum[k]) / (cum[k + 1] - cum[k])).clamp(0.0, 1.0 - f64::EPSILON);
             let u2 = sampling::uniform(&mut r);
-            EvalPoint { face: f, point: scene.polygon(f).sample_uniform(u1, u2), normal: scene.faces[f].normal, weight }
+            EvalPoint {
+                face: f,
+                point: scene.polygon(f).sample_uniform(u1, u2),
+                normal: scene.faces[f].normal,
+                weight,
+            }
         })
         .collect()
 }

@@ -34,5 +34,5 @@ pub use solver::{PerFaceSolution, Solution, Solver, Stats, Step};
 /// Linear RGB triple (f64 per channel): radiosity, emission, reflectance.
 pub type Rgb = glam::DVec3;
 
-pub use glam;
 pub use builtin::builtin;
+pub use glam;

@@ -28,10 +28,18 @@ pub trait MethodParams: Serialize + DeserializeOwned + Default + Clone + std::fm
                 || "parameters".to_string(),
                 |span| {
                     let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
-                    text[start..].split('=').next().unwrap_or_default().trim().to_string()
+                    text[start..]
+                        .split('=')
+                        .next()
+                        .unwrap_or_default()
+                        .trim()
+                        .to_string()
                 },
             );
-            SolveError::Parameter { name, message: e.message().to_string() }
+            SolveError::Parameter {
+                name,
+                message: e.message().to_string(),
+            }
         })?;
         p.validate()?;
         Ok(p)
@@ -54,7 +62,9 @@ pub trait MethodParams: Serialize + DeserializeOwned + Default + Clone + std::fm
 /// Parses one value as TOML, falling back to a bare string.
 pub fn parse_value(v: &str) -> toml::Value {
     match format!("v = {v}").parse::<toml::Table>() {
-        Ok(mut t) => t.remove("v").unwrap_or_else(|| toml::Value::String(v.to_string())),
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or_else(|| toml::Value::String(v.to_string())),
         Err(_) => toml::Value::String(v.to_string()),
     }
 }
@@ -64,7 +74,10 @@ pub fn pairs_to_table(pairs: &[(String, String)]) -> Result<toml::Table, SolveEr
     let mut t = toml::Table::new();
     for (k, v) in pairs {
         if k.is_empty() {
-            return Err(SolveError::param(k, "empty parameter name; use --set name=value"));
+            return Err(SolveError::param(
+                k,
+                "empty parameter name; use --set name=value",
+            ));
         }
         t.insert(k.clone(), parse_value(v));
     }
@@ -75,7 +88,10 @@ pub fn pairs_to_table(pairs: &[(String, String)]) -> Result<toml::Table, SolveEr
 pub fn split_pair(s: &str) -> Result<(String, String), SolveError> {
     match s.split_once('=') {
         Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
-        _ => Err(SolveError::param(s, "expected key=value, e.g. --set element_size=0.05")),
+        _ => Err(SolveError::param(
+            s,
+            "expected key=value, e.g. --set element_size=0.05",
+        )),
     }
 }
 
@@ -95,20 +111,40 @@ mod tests {
             vec![("a", "a number"), ("b", "a count"), ("mode", "a word")]
         }
         fn validate(&self) -> Result<(), SolveError> {
-            if self.a < 0.0 { Err(SolveError::param("a", "must be >= 0")) } else { Ok(()) }
+            if self.a < 0.0 {
+                Err(SolveError::param("a", "must be >= 0"))
+            } else {
+                Ok(())
+            }
         }
     }
 
     #[test]
     fn pairs_parse_and_unknown_keys_are_named() {
-        let pairs = vec![("a".to_string(), "0.5".to_string()), ("mode".to_string(), "jacobi".to_string())];
+        let pairs = vec![
+            ("a".to_string(), "0.5".to_string()),
+            ("mode".to_string(), "jacobi".to_string()),
+        ];
         let p = P::from_pairs(&pairs).expect("valid");
-        assert_eq!(p, P { a: 0.5, b: 0, mode: "jacobi".into() });
-        let err = P::from_pairs(&[("c".into(), "1".into())]).expect_err("unknown").to_string();
+        assert_eq!(
+            p,
+            P {
+                a: 0.5,
+                b: 0,
+                mode: "jacobi".into()
+            }
+        );
+        let err = P::from_pairs(&[("c".into(), "1".into())])
+            .expect_err("unknown")
+            .to_string();
         assert!(err.contains("unknown field `c`"), "{err}");
-        let err = P::from_pairs(&[("a".into(), "-1".into())]).expect_err("range").to_string();
+        let err = P::from_pairs(&[("a".into(), "-1".into())])
+            .expect_err("range")
+            .to_string();
         assert!(err.contains("'a'"), "{err}");
-        let err = P::from_pairs(&[("b".into(), "x".into())]).expect_err("type").to_string();
+        let err = P::from_pairs(&[("b".into(), "x".into())])
+            .expect_err("type")
+            .to_string();
         assert!(err.contains("'b'"), "{err}");
         assert!(split_pair("novalue").is_err());
     }

@@ -19,12 +19,18 @@ pub struct Polygon {
 impl Polygon {
     /// A triangle.
     pub fn triangle(a: DVec3, b: DVec3, c: DVec3) -> Self {
-        Self { verts: [a, b, c, c], n: 3 }
+        Self {
+            verts: [a, b, c, c],
+            n: 3,
+        }
     }
 
     /// A quadrilateral (must be planar and convex; see [`Polygon::is_planar_convex`]).
     pub fn quad(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> Self {
-        Self { verts: [a, b, c, d], n: 4 }
+        Self {
+            verts: [a, b, c, d],
+            n: 4,
+        }
     }
 
     /// From a slice of 3 or 4 vertices; `None` for any other count.
@@ -95,7 +101,9 @@ impl Polygon {
     /// Longest edge length.
     pub fn max_edge(&self) -> f64 {
         let v = self.vertices();
-        (0..v.len()).map(|k| (v[(k + 1) % v.len()] - v[k]).length()).fold(0.0, f64::max)
+        (0..v.len())
+            .map(|k| (v[(k + 1) % v.len()] - v[k]).length())
+            .fold(0.0, f64::max)
     }
 
     /// Diameter: the largest distance between two vertices.
@@ -238,7 +246,9 @@ impl Polygon {
             let m = segs(self.max_edge());
             let (a, b, c) = (v[0], v[1], v[2]);
             // Lattice point (i, j) = a + i/m (b - a) + j/m (c - a), i + j <= m.
-            let p = |i: usize, j: usize| a + (b - a) * (i as f64 / m as f64) + (c - a) * (j as f64 / m as f64);
+            let p = |i: usize, j: usize| {
+                a + (b - a) * (i as f64 / m as f64) + (c - a) * (j as f64 / m as f64)
+            };
             let mut out = Vec::with_capacity(m * m);
             for j in 0..m {
                 for i in 0..m - j {
@@ -287,7 +297,12 @@ mod tests {
     use glam::dvec3;
 
     fn unit_quad() -> Polygon {
-        Polygon::quad(dvec3(0., 0., 0.), dvec3(1., 0., 0.), dvec3(1., 1., 0.), dvec3(0., 1., 0.))
+        Polygon::quad(
+            dvec3(0., 0., 0.),
+            dvec3(1., 0., 0.),
+            dvec3(1., 1., 0.),
+            dvec3(0., 1., 0.),
+        )
     }
 
     #[test]
@@ -305,7 +320,12 @@ mod tests {
         let polys = [
             unit_quad(),
             Polygon::triangle(dvec3(0., 0., 0.), dvec3(3., 0., 1.), dvec3(0., 2., 0.5)),
-            Polygon::quad(dvec3(0., 0., 0.), dvec3(4., 0., 0.), dvec3(3., 2., 0.), dvec3(1., 2., 0.)),
+            Polygon::quad(
+                dvec3(0., 0., 0.),
+                dvec3(4., 0., 0.),
+                dvec3(3., 2., 0.),
+                dvec3(1., 2., 0.),
+            ),
         ];
         for p in polys {
             for size in [0.3, 0.77, 5.0] {
@@ -325,7 +345,12 @@ mod tests {
 
     #[test]
     fn samples_stay_inside_and_are_uniform() {
-        let p = Polygon::quad(dvec3(0., 0., 0.), dvec3(4., 0., 0.), dvec3(3., 2., 0.), dvec3(1., 2., 0.));
+        let p = Polygon::quad(
+            dvec3(0., 0., 0.),
+            dvec3(4., 0., 0.),
+            dvec3(3., 2., 0.),
+            dvec3(1., 2., 0.),
+        );
         let n = 200;
         let mut left = 0usize;
         for i in 0..n {
@@ -354,9 +379,19 @@ mod tests {
     #[test]
     fn planarity_and_convexity() {
         assert!(unit_quad().is_planar_convex(1e-9));
-        let bent = Polygon::quad(dvec3(0., 0., 0.), dvec3(1., 0., 0.), dvec3(1., 1., 0.3), dvec3(0., 1., 0.));
+        let bent = Polygon::quad(
+            dvec3(0., 0., 0.),
+            dvec3(1., 0., 0.),
+            dvec3(1., 1., 0.3),
+            dvec3(0., 1., 0.),
+        );
         assert!(!bent.is_planar_convex(1e-6));
-        let dart = Polygon::quad(dvec3(0., 0., 0.), dvec3(1., 0., 0.), dvec3(0.2, 0.2, 0.), dvec3(0., 1., 0.));
+        let dart = Polygon::quad(
+            dvec3(0., 0., 0.),
+            dvec3(1., 0., 0.),
+            dvec3(0.2, 0.2, 0.),
+            dvec3(0., 1., 0.),
+        );
         assert!(!dart.is_planar_convex(1e-6));
         let sliver = Polygon::triangle(dvec3(0., 0., 0.), dvec3(1., 0., 0.), dvec3(2., 0., 0.));
         assert!(!sliver.is_planar_convex(1e-9));

@@ -36,7 +36,10 @@ pub fn basis(n: DVec3) -> (DVec3, DVec3) {
     let s = 1.0f64.copysign(n.z);
     let a = -1.0 / (s + n.z);
     let b = n.x * n.y * a;
-    (DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), DVec3::new(b, s + n.y * n.y * a, -n.y))
+    (
+        DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        DVec3::new(b, s + n.y * n.y * a, -n.y),
+    )
 }
 
 /// A point on the unit disk from two numbers in [0,1), area-preserving (concentric map).
@@ -48,7 +51,10 @@ pub fn concentric_disk(u1: f64, u2: f64) -> (f64, f64) {
     let (r, phi) = if a.abs() > b.abs() {
         (a, std::f64::consts::FRAC_PI_4 * (b / a))
     } else {
-        (b, std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (a / b))
+        (
+            b,
+            std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (a / b),
+        )
     };
     (r * phi.cos(), r * phi.sin())
 }
@@ -67,16 +73,30 @@ mod tests {
 
     #[test]
     fn streams_are_reproducible_and_distinct() {
-        let a: Vec<f64> = (0..4).map(|_| 0.0).scan(rng(7, 3), |r, _| Some(uniform(r))).collect();
-        let b: Vec<f64> = (0..4).map(|_| 0.0).scan(rng(7, 3), |r, _| Some(uniform(r))).collect();
-        let c: Vec<f64> = (0..4).map(|_| 0.0).scan(rng(7, 4), |r, _| Some(uniform(r))).collect();
+        let a: Vec<f64> = (0..4)
+            .map(|_| 0.0)
+            .scan(rng(7, 3), |r, _| Some(uniform(r)))
+            .collect();
+        let b: Vec<f64> = (0..4)
+            .map(|_| 0.0)
+            .scan(rng(7, 3), |r, _| Some(uniform(r)))
+            .collect();
+        let c: Vec<f64> = (0..4)
+            .map(|_| 0.0)
+            .scan(rng(7, 4), |r, _| Some(uniform(r)))
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }
 
     #[test]
     fn basis_is_orthonormal() {
-        for n in [DVec3::Z, -DVec3::Z, DVec3::new(1.0, 2.0, -3.0).normalize(), DVec3::X] {
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::new(1.0, 2.0, -3.0).normalize(),
+            DVec3::X,
+        ] {
             let (t, b) = basis(n);
             assert!(t.dot(b).abs() < 1e-12 && t.dot(n).abs() < 1e-12 && b.dot(n).abs() < 1e-12);
             assert!((t.length() - 1.0).abs() < 1e-12 && (b.length() - 1.0).abs() < 1e-12);
@@ -89,7 +109,9 @@ mod tests {
         let n = DVec3::new(0.3, -0.2, 0.9).normalize();
         let mut r = rng(1, 0);
         let m = 200_000;
-        let s: f64 = (0..m).map(|_| cosine_hemisphere(n, uniform(&mut r), uniform(&mut r)).dot(n)).sum();
+        let s: f64 = (0..m)
+            .map(|_| cosine_hemisphere(n, uniform(&mut r), uniform(&mut r)).dot(n))
+            .sum();
         assert!((s / m as f64 - 2.0 / 3.0).abs() < 3e-3);
     }
 }

@@ -27,7 +27,11 @@ pub struct Material {
 impl Material {
     /// A validated material. `what` names the material's origin for the error message.
     pub fn new(name: &str, reflectance: Rgb, emission: Rgb) -> Result<Self, SceneError> {
-        let m = Self { name: name.to_string(), reflectance, emission };
+        let m = Self {
+            name: name.to_string(),
+            reflectance,
+            emission,
+        };
         m.validate()?;
         Ok(m)
     }
@@ -49,7 +53,9 @@ impl Material {
             if !(c.is_finite() && c >= 0.0) {
                 return Err(SceneError::Invalid {
                     field: format!("material '{}' emission", self.name),
-                    message: format!("{c} is not a finite value >= 0 (emission is radiant exitance in W/m²)"),
+                    message: format!(
+                        "{c} is not a finite value >= 0 (emission is radiant exitance in W/m²)"
+                    ),
                 });
             }
         }
@@ -130,7 +136,11 @@ impl Scene {
     pub fn polygon(&self, f: FaceId) -> Polygon {
         let face = &self.faces[f];
         let v = |k: usize| self.vertices[face.indices[k] as usize];
-        if face.vertex_count() == 3 { Polygon::triangle(v(0), v(1), v(2)) } else { Polygon::quad(v(0), v(1), v(2), v(3)) }
+        if face.vertex_count() == 3 {
+            Polygon::triangle(v(0), v(1), v(2))
+        } else {
+            Polygon::quad(v(0), v(1), v(2), v(3))
+        }
     }
 
     /// The face's material.
@@ -165,12 +175,16 @@ impl Scene {
 
     /// Faces whose material emits.
     pub fn emitters(&self) -> Vec<FaceId> {
-        (0..self.faces.len()).filter(|&f| self.material(f).is_emitter()).collect()
+        (0..self.faces.len())
+            .filter(|&f| self.material(f).is_emitter())
+            .collect()
     }
 
     /// Total emitted power per channel, Σ A_i E_i (W).
     pub fn emitted_power(&self) -> Rgb {
-        (0..self.faces.len()).map(|f| self.faces[f].area * self.emission(f)).sum()
+        (0..self.faces.len())
+            .map(|f| self.faces[f].area * self.emission(f))
+            .sum()
     }
 
     /// Total surface area.
@@ -202,7 +216,10 @@ pub const DEGENERATE_REL_TOL: f64 = 1e-9;
 impl SceneBuilder {
     /// An empty builder for a scene of that name.
     pub fn new(name: &str) -> Self {
-        Self { name: name.to_string(), ..Self::default() }
+        Self {
+            name: name.to_string(),
+            ..Self::default()
+        }
     }
 
     /// Adds a material (validated) and returns its index.
@@ -214,7 +231,10 @@ impl SceneBuilder {
 
     /// Index of the material with that name, if any.
     pub fn material_index(&self, name: &str) -> Option<u32> {
-        self.materials.iter().position(|m| m.name == name).map(|i| i as u32)
+        self.materials
+            .iter()
+            .position(|m| m.name == name)
+            .map(|i| i as u32)
     }
 
     /// Adds a vertex, rejecting non-finite coordinates. `what` names the source for the message
@@ -223,7 +243,10 @@ impl SceneBuilder {
         if !p.is_finite() {
             return Err(SceneError::Invalid {
                 field: what.to_string(),
-                message: format!("vertex ({}, {}, {}) is not finite; every coordinate must be a finite number", p.x, p.y, p.z),
+                message: format!(
+                    "vertex ({}, {}, {}) is not finite; every coordinate must be a finite number",
+                    p.x, p.y, p.z
+                ),
             });
         }
         self.vertices.push(p);
@@ -238,24 +261,38 @@ impl SceneBuilder {
     /// Adds a polygon over existing vertex indices. Triangles and planar convex quads are kept as they are;
     /// larger polygons are fanned into triangles (counted); degenerate ones are dropped (counted).
     /// Returns the number of faces added.
-    pub fn add_polygon(&mut self, idx: &[u32], material: u32, what: &str) -> Result<usize, SceneError> {
+    pub fn add_polygon(
+        &mut self,
+        idx: &[u32],
+        material: u32,
+        what: &str,
+    ) -> Result<usize, SceneError> {
         if idx.len() < 3 {
             return Err(SceneError::Invalid {
                 field: what.to_string(),
-                message: format!("a face needs at least 3 vertices, this one has {}", idx.len()),
+                message: format!(
+                    "a face needs at least 3 vertices, this one has {}",
+                    idx.len()
+                ),
             });
         }
         if material as usize >= self.materials.len() {
             return Err(SceneError::Invalid {
                 field: what.to_string(),
-                message: format!("material index {material} does not exist ({} materials defined)", self.materials.len()),
+                message: format!(
+                    "material index {material} does not exist ({} materials defined)",
+                    self.materials.len()
+                ),
             });
         }
         for &i in idx {
             if i as usize >= self.vertices.len() {
                 return Err(SceneError::Invalid {
                     field: what.to_string(),
-                    message: format!("vertex index {i} is out of range ({} vertices defined)", self.vertices.len()),
+                    message: format!(
+                        "vertex index {i} is out of range ({} vertices defined)",
+                        self.vertices.len()
+                    ),
                 });
             }
         }
@@ -275,9 +312,11 @@ impl SceneBuilder {
                 let (d02, d13) = ((v(2) - v(0)).length(), (v(3) - v(1)).length());
                 self.warnings.nonplanar_faces += 1;
                 return Ok(if d02 <= d13 {
-                    self.push_face(&[idx[0], idx[1], idx[2]], material) + self.push_face(&[idx[0], idx[2], idx[3]], material)
+                    self.push_face(&[idx[0], idx[1], idx[2]], material)
+                        + self.push_face(&[idx[0], idx[2], idx[3]], material)
                 } else {
-                    self.push_face(&[idx[0], idx[1], idx[3]], material) + self.push_face(&[idx[1], idx[2], idx[3]], material)
+                    self.push_face(&[idx[0], idx[1], idx[3]], material)
+                        + self.push_face(&[idx[1], idx[2], idx[3]], material)
                 });
             }
         }
@@ -299,12 +338,23 @@ impl SceneBuilder {
         }
         let mut indices = [u32::MAX; 4];
         indices[..idx.len()].copy_from_slice(idx);
-        self.faces.push(Face { indices, material, normal: p.normal(), area, centroid: p.centroid() });
+        self.faces.push(Face {
+            indices,
+            material,
+            normal: p.normal(),
+            area,
+            centroid: p.centroid(),
+        });
         1
     }
 
     /// Adds a polygon given by its vertex positions (3 or more), creating the vertices.
-    pub fn add_polygon_points(&mut self, pts: &[DVec3], material: u32, what: &str) -> Result<usize, SceneError> {
+    pub fn add_polygon_points(
+        &mut self,
+        pts: &[DVec3],
+        material: u32,
+        what: &str,
+    ) -> Result<usize, SceneError> {
         let mut idx = Vec::with_capacity(pts.len());
         for &p in pts {
             idx.push(self.add_vertex(p, what)?);

@@ -37,8 +37,16 @@ pub(super) fn infos() -> Vec<BuiltinInfo> {
             name: "perpendicular-squares",
             doc: "Emitter perpendicular to a receiver, sharing an edge (open scene): B_receiver = rho E F (Howell C-14).",
             params: &[
-                ("width", "1", "receiver extent away from the shared edge (x)"),
-                ("height", "1", "emitter extent away from the shared edge (z)"),
+                (
+                    "width",
+                    "1",
+                    "receiver extent away from the shared edge (x)",
+                ),
+                (
+                    "height",
+                    "1",
+                    "emitter extent away from the shared edge (z)",
+                ),
                 ("length", "1", "shared edge length (y)"),
                 ("emission", "1", "emitter's E"),
                 ("reflectance", "0.5", "receiver's rho"),
@@ -50,17 +58,31 @@ pub(super) fn infos() -> Vec<BuiltinInfo> {
 }
 
 /// Adds an n × n grid of quads over the parallelogram `o + s·u + t·v`, normal along u × v.
-pub(crate) fn add_grid(b: &mut SceneBuilder, o: DVec3, u: DVec3, v: DVec3, n: usize, mat: u32) -> Result<(), SceneError> {
+pub(crate) fn add_grid(
+    b: &mut SceneBuilder,
+    o: DVec3,
+    u: DVec3,
+    v: DVec3,
+    n: usize,
+    mat: u32,
+) -> Result<(), SceneError> {
     let base = b.vertex_count() as u32;
     for j in 0..=n {
         for i in 0..=n {
-            b.add_vertex(o + u * (i as f64 / n as f64) + v * (j as f64 / n as f64), "grid")?;
+            b.add_vertex(
+                o + u * (i as f64 / n as f64) + v * (j as f64 / n as f64),
+                "grid",
+            )?;
         }
     }
     let idx = |i: usize, j: usize| base + (j * (n + 1) + i) as u32;
     for j in 0..n {
         for i in 0..n {
-            b.add_polygon(&[idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)], mat, "grid")?;
+            b.add_polygon(
+                &[idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)],
+                mat,
+                "grid",
+            )?;
         }
     }
     Ok(())
@@ -76,11 +98,11 @@ fn furnace_cube(a: &Args) -> Result<Scene, SceneError> {
     // Six faces with inward normals (u × v points into the cube).
     let faces = [
         (dvec3(0., 0., 0.), dvec3(s, 0., 0.), dvec3(0., s, 0.)), // z = 0, normal +z
-        (dvec3(0., 0., s), dvec3(0., s, 0.), dvec3(s, 0., 0.)), // z = s, normal -z
+        (dvec3(0., 0., s), dvec3(0., s, 0.), dvec3(s, 0., 0.)),  // z = s, normal -z
         (dvec3(0., 0., 0.), dvec3(0., s, 0.), dvec3(0., 0., s)), // x = 0, normal +x
-        (dvec3(s, 0., 0.), dvec3(0., 0., s), dvec3(0., s, 0.)), // x = s, normal -x
+        (dvec3(s, 0., 0.), dvec3(0., 0., s), dvec3(0., s, 0.)),  // x = s, normal -x
         (dvec3(0., 0., 0.), dvec3(0., 0., s), dvec3(s, 0., 0.)), // y = 0, normal +y
-        (dvec3(0., s, 0.), dvec3(s, 0., 0.), dvec3(0., 0., s)), // y = s, normal -y
+        (dvec3(0., s, 0.), dvec3(s, 0., 0.), dvec3(0., 0., s)),  // y = s, normal -y
     ];
     for (o, u, v) in faces {
         add_grid(&mut b, o, u, v, n, m)?;
@@ -99,8 +121,22 @@ fn parallel_squares(a: &Args) -> Result<Scene, SceneError> {
     let light = b.add_material(Material::new("emitter", DVec3::ZERO, e)?)?;
     let recv = b.add_material(Material::new("receiver", rho, DVec3::ZERO)?)?;
     // Receiver at z = 0 facing +z; emitter at z = h facing -z.
-    add_grid(&mut b, DVec3::ZERO, dvec3(w, 0., 0.), dvec3(0., d, 0.), n, recv)?;
-    add_grid(&mut b, dvec3(0., 0., h), dvec3(0., d, 0.), dvec3(w, 0., 0.), n, light)?;
+    add_grid(
+        &mut b,
+        DVec3::ZERO,
+        dvec3(w, 0., 0.),
+        dvec3(0., d, 0.),
+        n,
+        recv,
+    )?;
+    add_grid(
+        &mut b,
+        dvec3(0., 0., h),
+        dvec3(0., d, 0.),
+        dvec3(w, 0., 0.),
+        n,
+        light,
+    )?;
     b.build()
 }
 
@@ -115,8 +151,22 @@ fn perpendicular_squares(a: &Args) -> Result<Scene, SceneError> {
     let light = b.add_material(Material::new("emitter", DVec3::ZERO, e)?)?;
     let recv = b.add_material(Material::new("receiver", rho, DVec3::ZERO)?)?;
     // Receiver in z = 0 (x ∈ [0, w], y ∈ [0, l]) facing +z; emitter in x = 0 (z ∈ [0, h]) facing +x.
-    add_grid(&mut b, DVec3::ZERO, dvec3(w, 0., 0.), dvec3(0., l, 0.), n, recv)?;
-    add_grid(&mut b, DVec3::ZERO, dvec3(0., l, 0.), dvec3(0., 0., h), n, light)?;
+    add_grid(
+        &mut b,
+        DVec3::ZERO,
+        dvec3(w, 0., 0.),
+        dvec3(0., l, 0.),
+        n,
+        recv,
+    )?;
+    add_grid(
+        &mut b,
+        DVec3::ZERO,
+        dvec3(0., l, 0.),
+        dvec3(0., 0., h),
+        n,
+        light,
+    )?;
     b.build()
 }
 
@@ -148,11 +198,20 @@ mod tests {
     fn bad_specs_are_named() {
         let e = builtin("nope").err().expect("unknown").to_string();
         assert!(e.contains("furnace-cube"), "{e}");
-        let e = builtin("furnace-cube?reflectance=1").err().expect("rho=1").to_string();
+        let e = builtin("furnace-cube?reflectance=1")
+            .err()
+            .expect("rho=1")
+            .to_string();
         assert!(e.contains("reflectance"), "{e}");
-        let e = builtin("furnace-cube?colour=1").err().expect("unknown key").to_string();
+        let e = builtin("furnace-cube?colour=1")
+            .err()
+            .expect("unknown key")
+            .to_string();
         assert!(e.contains("colour") && e.contains("tessellation"), "{e}");
-        let e = builtin("furnace-cube?size=nan").err().expect("nan").to_string();
+        let e = builtin("furnace-cube?size=nan")
+            .err()
+            .expect("nan")
+            .to_string();
         assert!(e.contains("size"), "{e}");
     }
 }

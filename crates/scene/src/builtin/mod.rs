@@ -34,17 +34,28 @@ pub struct Args {
 
 impl Args {
     fn raw(&self, key: &str) -> Option<&str> {
-        self.pairs.iter().rev().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
+        self.pairs
+            .iter()
+            .rev()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
     }
 
     fn err(&self, key: &str, msg: String) -> SceneError {
-        SceneError::Invalid { field: format!("builtin:{} parameter '{key}'", self.scene), message: msg }
+        SceneError::Invalid {
+            field: format!("builtin:{} parameter '{key}'", self.scene),
+            message: msg,
+        }
     }
 
     /// A finite number within [lo, hi].
     pub fn f64(&self, key: &str, default: f64, lo: f64, hi: f64) -> Result<f64, SceneError> {
-        let Some(v) = self.raw(key) else { return Ok(default) };
-        let x: f64 = v.parse().map_err(|_| self.err(key, format!("'{v}' is not a number")))?;
+        let Some(v) = self.raw(key) else {
+            return Ok(default);
+        };
+        let x: f64 = v
+            .parse()
+            .map_err(|_| self.err(key, format!("'{v}' is not a number")))?;
         if !(x.is_finite() && x >= lo && x <= hi) {
             return Err(self.err(key, format!("{x} is outside [{lo}, {hi}]")));
         }
@@ -61,9 +72,19 @@ impl Args {
     }
 
     /// An integer within [lo, hi].
-    pub fn usize(&self, key: &str, default: usize, lo: usize, hi: usize) -> Result<usize, SceneError> {
-        let Some(v) = self.raw(key) else { return Ok(default) };
-        let x: usize = v.parse().map_err(|_| self.err(key, format!("'{v}' is not a whole number")))?;
+    pub fn usize(
+        &self,
+        key: &str,
+        default: usize,
+        lo: usize,
+        hi: usize,
+    ) -> Result<usize, SceneError> {
+        let Some(v) = self.raw(key) else {
+            return Ok(default);
+        };
+        let x: usize = v
+            .parse()
+            .map_err(|_| self.err(key, format!("'{v}' is not a whole number")))?;
         if x < lo || x > hi {
             return Err(self.err(key, format!("{x} is outside [{lo}, {hi}]")));
         }
@@ -71,11 +92,21 @@ impl Args {
     }
 
     /// A grey or `r,g,b` colour, each channel within [lo, hi] (and below `hi` when `below`).
-    pub fn rgb(&self, key: &str, default: Rgb, lo: f64, hi: f64, below: bool) -> Result<Rgb, SceneError> {
-        let Some(v) = self.raw(key) else { return Ok(default) };
+    pub fn rgb(
+        &self,
+        key: &str,
+        default: Rgb,
+        lo: f64,
+        hi: f64,
+        below: bool,
+    ) -> Result<Rgb, SceneError> {
+        let Some(v) = self.raw(key) else {
+            return Ok(default);
+        };
         let parts: Vec<&str> = v.split(',').collect();
         let vals: Result<Vec<f64>, _> = parts.iter().map(|s| s.trim().parse::<f64>()).collect();
-        let vals = vals.map_err(|_| self.err(key, format!("'{v}' is not a number or r,g,b triple")))?;
+        let vals =
+            vals.map_err(|_| self.err(key, format!("'{v}' is not a number or r,g,b triple")))?;
         let c = match vals[..] {
             [g] => DVec3::splat(g),
             [r, g, b] => DVec3::new(r, g, b),
@@ -83,7 +114,11 @@ impl Args {
         };
         for x in c.to_array() {
             if !(x.is_finite() && x >= lo && x <= hi) || (below && x >= hi) {
-                let range = if below { format!("[{lo}, {hi})") } else { format!("[{lo}, {hi}]") };
+                let range = if below {
+                    format!("[{lo}, {hi})")
+                } else {
+                    format!("[{lo}, {hi}]")
+                };
                 return Err(self.err(key, format!("{x} is outside {range}")));
             }
         }
@@ -114,10 +149,16 @@ pub fn builtin(spec: &str) -> Result<Scene, SceneError> {
             let known: Vec<&str> = info.params.iter().map(|p| p.0).collect();
             return Err(SceneError::Invalid {
                 field: format!("builtin:{name}"),
-                message: format!("unknown parameter '{k}'; its parameters are: {}", known.join(", ")),
+                message: format!(
+                    "unknown parameter '{k}'; its parameters are: {}",
+                    known.join(", ")
+                ),
             });
         }
         pairs.push((k.to_string(), v.to_string()));
     }
-    (info.build)(&Args { scene: info.name, pairs })
+    (info.build)(&Args {
+        scene: info.name,
+        pairs,
+    })
 }

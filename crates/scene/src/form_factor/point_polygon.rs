@@ -75,7 +75,12 @@ mod tests {
     fn infinite_plane_limit_is_one() {
         // A huge square facing down, at height 1 above an upward receiver: F → 1.
         let s = 1e6;
-        let p = Polygon::quad(dvec3(-s, -s, 1.), dvec3(-s, s, 1.), dvec3(s, s, 1.), dvec3(s, -s, 1.));
+        let p = Polygon::quad(
+            dvec3(-s, -s, 1.),
+            dvec3(-s, s, 1.),
+            dvec3(s, s, 1.),
+            dvec3(s, -s, 1.),
+        );
         let f = point_polygon(DVec3::ZERO, DVec3::Z, &p);
         assert!((f - 1.0).abs() < 1e-5, "{f}");
     }
@@ -90,18 +95,36 @@ mod tests {
                 / (2.0 * std::f64::consts::PI)
         };
         for (a, b, h) in [(1.0, 1.0, 1.0), (0.3, 2.0, 0.7), (5.0, 0.1, 2.0)] {
-            let p = Polygon::quad(dvec3(0., 0., h), dvec3(0., b, h), dvec3(a, b, h), dvec3(a, 0., h));
+            let p = Polygon::quad(
+                dvec3(0., 0., h),
+                dvec3(0., b, h),
+                dvec3(a, b, h),
+                dvec3(a, 0., h),
+            );
             let f = point_polygon(DVec3::ZERO, DVec3::Z, &p);
             let exact = corner(a / h, b / h);
-            assert!((f - exact).abs() < 1e-12 * exact.max(1.0), "{a} {b} {h}: {f} vs {exact}");
+            assert!(
+                (f - exact).abs() < 1e-12 * exact.max(1.0),
+                "{a} {b} {h}: {f} vs {exact}"
+            );
         }
     }
 
     #[test]
     fn back_facing_and_below_horizon_give_zero() {
-        let up = Polygon::quad(dvec3(0., 0., 1.), dvec3(1., 0., 1.), dvec3(1., 1., 1.), dvec3(0., 1., 1.));
+        let up = Polygon::quad(
+            dvec3(0., 0., 1.),
+            dvec3(1., 0., 1.),
+            dvec3(1., 1., 1.),
+            dvec3(0., 1., 1.),
+        );
         assert_eq!(point_polygon(DVec3::ZERO, DVec3::Z, &up), 0.0); // its front faces away (+z)
-        let down = Polygon::quad(dvec3(0., 0., -1.), dvec3(0., 1., -1.), dvec3(1., 1., -1.), dvec3(1., 0., -1.));
+        let down = Polygon::quad(
+            dvec3(0., 0., -1.),
+            dvec3(0., 1., -1.),
+            dvec3(1., 1., -1.),
+            dvec3(1., 0., -1.),
+        );
         assert_eq!(point_polygon(DVec3::ZERO, DVec3::Z, &down), 0.0); // below the horizon
     }
 
@@ -109,8 +132,18 @@ mod tests {
     fn horizon_clipping_halves_a_symmetric_wall() {
         // A vertical wall facing the receiver, centred on its horizon: the clipped half equals the factor of a
         // wall that only spans the upper half.
-        let full = Polygon::quad(dvec3(1., -1., -1.), dvec3(1., -1., 1.), dvec3(1., 1., 1.), dvec3(1., 1., -1.));
-        let upper = Polygon::quad(dvec3(1., -1., 0.), dvec3(1., -1., 1.), dvec3(1., 1., 1.), dvec3(1., 1., 0.));
+        let full = Polygon::quad(
+            dvec3(1., -1., -1.),
+            dvec3(1., -1., 1.),
+            dvec3(1., 1., 1.),
+            dvec3(1., 1., -1.),
+        );
+        let upper = Polygon::quad(
+            dvec3(1., -1., 0.),
+            dvec3(1., -1., 1.),
+            dvec3(1., 1., 1.),
+            dvec3(1., 1., 0.),
+        );
         let a = point_polygon(DVec3::ZERO, DVec3::Z, &full);
         let b = point_polygon(DVec3::ZERO, DVec3::Z, &upper);
         assert!(a > 0.0 && (a - b).abs() < 1e-14, "{a} {b}");

@@ -1,0 +1,1 @@
+//! radlab-hierarchical (to be written).

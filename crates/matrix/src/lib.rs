@@ -1,0 +1,1 @@
+//! radlab-matrix (to be written).

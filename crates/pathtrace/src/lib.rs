@@ -1,0 +1,1 @@
+//! radlab-pathtrace (to be written).

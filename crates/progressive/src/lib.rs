@@ -1,0 +1,1 @@
+//! radlab-progressive (to be written).
