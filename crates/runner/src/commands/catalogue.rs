@@ -1,0 +1,39 @@
+//! `radlab scenes` and `radlab methods`: what exists, with parameters and defaults.
+
+use crate::methods::{self, ParamLine};
+
+fn print_params(params: &[ParamLine]) {
+    for p in params {
+        println!("    {:<24} default {:<14} {}", p.name, p.default, p.doc);
+    }
+}
+
+/// Lists the builtin scenes and the file formats.
+pub fn scenes() {
+    println!(
+        "Scenes are files (.toml, .obj with .mtl, .ply, .off; see scenes/README.md) or builtins:\n"
+    );
+    for b in radlab_scene::builtin::builtins() {
+        println!("builtin:{}\n    {}", b.name, b.doc);
+        for (name, default, doc) in b.params {
+            println!("    {:<24} default {:<14} {}", name, default, doc);
+        }
+        println!();
+    }
+}
+
+/// Lists the methods with their parameters.
+pub fn methods() {
+    println!("Methods (--method NAME; parameters with --set key=value):\n");
+    for m in methods::methods() {
+        println!("{}\n    {}", m.name, m.summary);
+        print_params(&(m.params)());
+        println!();
+    }
+    println!(
+        "{}\n    {}",
+        crate::pathtraced::NAME,
+        crate::pathtraced::SUMMARY
+    );
+    print_params(&crate::pathtraced::params());
+}

@@ -1,0 +1,459 @@
+//! Executing one run: build the method, step it to its stopping rule under the experiment's limits, evaluate
+//! the solution at the evaluation points between steps (outside the timed region) against the reference, and
+//! write `runs/<id>.trace.csv`, `images/<id>.exr` and, last, `runs/<id>.json` (its presence marks the run
+//! complete). With isolation the run executes in a child process (`radlab run-one JOB.json`), so a crash, a
+//! timeout or running out of memory is recorded as the run's outcome and the experiment goes on.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use radlab_scene::{Accel, EvalPoint, Rgb, Solution};
+use serde::{Deserialize, Serialize};
+
+use super::config::{Evaluation, LimitsConfig, OutputsConfig, ReferenceKind, RunSpec};
+use super::metrics::{self, Errors};
+use super::reference;
+use crate::output::atomic::write_bytes;
+use crate::output::exr_image::write_exr;
+use crate::solve_loop::{self, Limits};
+
+/// Everything a run needs, serialisable for the child process.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Job {
+    /// The run.
+    pub spec: RunSpec,
+    /// Digest of everything that determines the result (skip check).
+    pub digest: String,
+    /// The experiment's output directory.
+    pub dir: PathBuf,
+    /// Input faces of the scene.
+    pub faces: u64,
+    /// The cached reference file.
+    pub reference_file: PathBuf,
+    /// Which reference it is.
+    pub reference_kind: ReferenceKind,
+    /// The reference's noise floor.
+    pub floor: Errors,
+    /// Evaluation points.
+    pub evaluation: Evaluation,
+    /// Limits.
+    pub limits: LimitsConfig,
+    /// Outputs.
+    pub outputs: OutputsConfig,
+}
+
+/// One row of `runs.csv`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct RunResult {
+    /// Run id.
+    pub id: String,
+    /// Config digest.
+    pub digest: String,
+    /// Expansion index.
+    pub index: usize,
+    /// Scene label.
+    pub scene: String,
+    /// Scaling family ("" for none).
+    pub family: String,
+    /// Input faces of the scene.
+    pub faces: u64,
+    /// Method name.
+    pub method: String,
+    /// Method label.
+    pub label: String,
+    /// All parameters, `k=v;...`.
+    pub params: String,
+    /// Swept parameters, `k=v;...`.
+    pub sweep: String,
+    /// Seed.
+    pub seed: u64,
+    /// converged, step-limit, time-limit, target-error, error, crash, timeout, out-of-memory.
+    pub outcome: String,
+    /// Error message for failed runs.
+    pub message: String,
+    /// Steps taken.
+    pub steps: u64,
+    /// Wall seconds in steps.
+    pub wall_s: f64,
+    /// CPU seconds in steps (all threads).
+    pub cpu_s: f64,
+    /// Peak resident memory of the run's process, bytes.
+    pub peak_rss_bytes: u64,
+    /// Elements.
+    pub elements: u64,
+    /// Links.
+    pub links: u64,
+    /// Form factors.
+    pub form_factors: u64,
+    /// Rays.
+    pub rays: u64,
+    /// Bytes the solver holds.
+    pub bytes: u64,
+    /// Final relative L1 error.
+    pub l1: f64,
+    /// Final relative L2 error.
+    pub l2: f64,
+    /// Final max relative error.
+    pub max: f64,
+    /// Reference noise floor, L1.
+    pub floor_l1: f64,
+    /// Reference noise floor, L2.
+    pub floor_l2: f64,
+    /// Reference kind.
+    pub reference: String,
+}
+
+/// One row of `trace.csv`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct TraceRow {
+    /// Run id.
+    pub id: String,
+    /// Scene label.
+    pub scene: String,
+    /// Method label.
+    pub label: String,
+    /// Swept parameters.
+    pub sweep: String,
+    /// Seed.
+    pub seed: u64,
+    /// Step number.
+    pub step: u64,
+    /// Wall seconds of steps so far.
+    pub wall_s: f64,
+    /// CPU seconds of steps so far.
+    pub cpu_s: f64,
+    /// Elements.
+    pub elements: u64,
+    /// Links.
+    pub links: u64,
+    /// Form factors.
+    pub form_factors: u64,
+    /// Rays.
+    pub rays: u64,
+    /// Bytes held.
+    pub bytes: u64,
+    /// The method's own residual, if any.
+    pub residual: Option<f64>,
+    /// Relative L1 error.
+    pub l1: f64,
+    /// Relative L2 error.
+    pub l2: f64,
+    /// Max relative error.
+    pub max: f64,
+}
+
+/// Paths of a run's files.
+pub fn result_path(dir: &Path, id: &str) -> PathBuf {
+    dir.join("runs").join(format!("{id}.json"))
+}
+
+/// Path of a run's trace.
+pub fn trace_path(dir: &Path, id: &str) -> PathBuf {
+    dir.join("runs").join(format!("{id}.trace.csv"))
+}
+
+/// Path of a run's image.
+pub fn image_path(dir: &Path, id: &str) -> PathBuf {
+    dir.join("images").join(format!("{id}.exr"))
+}
+
+fn base_result(job: &Job) -> RunResult {
+    let s = &job.spec;
+    RunResult {
+        id: s.id(),
+        digest: job.digest.clone(),
+        index: s.index,
+        scene: s.scene_label.clone(),
+        family: s.family.clone(),
+        faces: job.faces,
+        method: s.method.clone(),
+        label: s.label.clone(),
+        params: s.params_string(),
+        sweep: s.sweep.clone(),
+        seed: s.seed,
+        floor_l1: job.floor.l1,
+        floor_l2: job.floor.l2,
+        reference: format!("{:?}", job.reference_kind).to_lowercase(),
+        l1: f64::NAN,
+        l2: f64::NAN,
+        max: f64::NAN,
+        ..Default::default()
+    }
+}
+
+/// Writes a run's result JSON (atomically).
+pub fn write_result(dir: &Path, r: &RunResult) -> Result<()> {
+    write_bytes(&result_path(dir, &r.id), |w| {
+        Ok(serde_json::to_writer_pretty(w, r)?)
+    })
+}
+
+/// Reads a run's result JSON.
+pub fn read_result(path: &Path) -> Result<RunResult> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: malformed run result", path.display()))
+}
+
+fn evaluate(
+    solution: &dyn Solution,
+    points: &[EvalPoint],
+    reference: &[Rgb],
+    weights: &[f64],
+) -> Errors {
+    use rayon::prelude::*;
+    let values: Vec<Rgb> = points
+        .par_iter()
+        .map(|p| solution.radiosity_at(p.face, p.point))
+        .collect();
+    metrics::errors(&values, reference, weights)
+}
+
+/// Runs a job in this process and writes its files. Failures of the method become the run's outcome.
+pub fn execute(job: &Job) -> Result<RunResult> {
+    let mut result = base_result(job);
+    match execute_inner(job, &mut result) {
+        Ok(()) => {}
+        Err(e) => {
+            result.outcome = "error".into();
+            result.message = format!("{e:#}");
+        }
+    }
+    result.peak_rss_bytes = solve_loop::peak_rss_bytes().unwrap_or(0);
+    write_result(&job.dir, &result)?;
+    Ok(result)
+}
+
+fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
+    let spec = &job.spec;
+    let scene = crate::scene_spec::load(&spec.scene)?;
+    let accel = Accel::new(&scene);
+    let points =
+        radlab_scene::evaluation_points(&scene, job.evaluation.points, job.evaluation.seed);
+    let (reference, _) = reference::read_cache(&job.reference_file, points.len())?;
+    let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
+    let method = crate::methods::find(&spec.method)?;
+    let mut solver = (method.build)(&scene, &accel, spec.params.clone(), spec.seed)?;
+    let limits = Limits {
+        max_steps: job.limits.max_steps,
+        time_limit: Duration::from_secs_f64(job.limits.time_limit),
+    };
+    let mut trace = Vec::new();
+    let mut last_eval = Errors {
+        l1: f64::NAN,
+        l2: f64::NAN,
+        max: f64::NAN,
+    };
+    let target = job.limits.target_error;
+    let every = job.evaluation.every;
+    // The after-step hook evaluates outside the timed region; reaching the target error ends the run.
+    let run = solve_loop::run(&mut *solver, limits, |s, rec| {
+        if rec.step % every == 0 || rec.step == 1 {
+            last_eval = evaluate(s.solution(), &points, &reference, &weights);
+            trace.push(row(spec, rec, last_eval));
+            if target > 0.0 && last_eval.l1 <= target {
+                anyhow::bail!(TargetReached);
+            }
+        }
+        Ok(())
+    });
+    let (outcome, rec) = match run {
+        Ok((o, rec)) => (o.as_str().to_string(), rec),
+        Err(e) if e.is::<TargetReached>() => {
+            let rec = solve_loop::StepRecord {
+                step: trace.last().map_or(0, |t: &TraceRow| t.step),
+                wall: Duration::from_secs_f64(trace.last().map_or(0.0, |t| t.wall_s)),
+                cpu: Duration::from_secs_f64(trace.last().map_or(0.0, |t| t.cpu_s)),
+                stats: solver.stats(),
+            };
+            ("target-error".to_string(), rec)
+        }
+        Err(e) => return Err(e),
+    };
+    if trace.last().is_none_or(|t| t.step != rec.step) {
+        last_eval = evaluate(solver.solution(), &points, &reference, &weights);
+        trace.push(row(spec, &rec, last_eval));
+    }
+    result.outcome = outcome;
+    result.steps = rec.step;
+    result.wall_s = rec.wall.as_secs_f64();
+    result.cpu_s = rec.cpu.as_secs_f64();
+    let st = rec.stats;
+    (
+        result.elements,
+        result.links,
+        result.form_factors,
+        result.rays,
+        result.bytes,
+    ) = (st.elements, st.links, st.form_factors, st.rays, st.bytes);
+    (result.l1, result.l2, result.max) = (last_eval.l1, last_eval.l2, last_eval.max);
+    write_bytes(&trace_path(&job.dir, &result.id), |w| {
+        let mut out = csv::Writer::from_writer(w);
+        for t in &trace {
+            out.serialize(t)?;
+        }
+        out.flush()?;
+        Ok(())
+    })?;
+    if job.outputs.images {
+        if let Some(camera) = super::images::camera_for(&scene, &job.outputs) {
+            let image = radlab_scene::render_solution(
+                &accel,
+                &camera,
+                solver.solution(),
+                job.outputs.image_spp,
+                spec.seed,
+            );
+            write_exr(&image_path(&job.dir, &result.id), &image)?;
+        }
+    }
+    Ok(())
+}
+
+#[derive(Debug)]
+struct TargetReached;
+impl std::fmt::Display for TargetReached {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("target error reached")
+    }
+}
+impl std::error::Error for TargetReached {}
+
+fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors) -> TraceRow {
+    let st = rec.stats;
+    TraceRow {
+        id: spec.id(),
+        scene: spec.scene_label.clone(),
+        label: spec.label.clone(),
+        sweep: spec.sweep.clone(),
+        seed: spec.seed,
+        step: rec.step,
+        wall_s: rec.wall.as_secs_f64(),
+        cpu_s: rec.cpu.as_secs_f64(),
+        elements: st.elements,
+        links: st.links,
+        form_factors: st.form_factors,
+        rays: st.rays,
+        bytes: st.bytes,
+        residual: st.residual,
+        l1: e.l1,
+        l2: e.l2,
+        max: e.max,
+    }
+}
+
+/// Entry point of the child process: reads the job, watches memory, executes.
+pub fn run_child(job_file: &Path) -> Result<()> {
+    let text = std::fs::read_to_string(job_file)
+        .with_context(|| format!("{}: cannot read job", job_file.display()))?;
+    let job: Job = serde_json::from_str(&text)
+        .with_context(|| format!("{}: malformed job", job_file.display()))?;
+    if job.limits.memory_limit_mib > 0 {
+        let limit = job.limits.memory_limit_mib * 1024 * 1024;
+        let job2 = job.clone();
+        std::thread::spawn(move || {
+            loop {
+                if current_rss_bytes().is_some_and(|rss| rss > limit) {
+                    let mut r = base_result(&job2);
+                    r.outcome = "out-of-memory".into();
+                    r.message = format!(
+                        "resident memory exceeded the limit of {} MiB",
+                        job2.limits.memory_limit_mib
+                    );
+                    r.peak_rss_bytes = solve_loop::peak_rss_bytes().unwrap_or(0);
+                    let _ = write_result(&job2.dir, &r);
+                    std::process::exit(3);
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        });
+    }
+    // Fault injection, for the tests of run isolation: RADLAB_FAULT=panic makes a child run panic.
+    if std::env::var_os("RADLAB_FAULT").is_some_and(|v| v == "panic") {
+        panic!("injected fault (RADLAB_FAULT=panic)");
+    }
+    execute(&job).map(|_| ())
+}
+
+/// Current resident set size (Linux `VmRSS`), bytes.
+pub fn current_rss_bytes() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmRSS:"))?;
+    Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
+}
+
+/// Runs a job in a child process, killing it after the kill timeout; records crashes and timeouts.
+pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> {
+    let id = job.spec.id();
+    let job_file = job.dir.join("runs").join(format!("{id}.job.json"));
+    write_bytes(&job_file, |w| Ok(serde_json::to_writer(w, job)?))?;
+    let result_file = result_path(&job.dir, &id);
+    let _ = std::fs::remove_file(&result_file);
+    let exe = std::env::current_exe()
+        .context("cannot find the radlab executable to run a child process")?;
+    let mut cmd = Command::new(exe);
+    if let Some(n) = threads {
+        cmd.arg("--threads").arg(n.to_string());
+    }
+    cmd.arg("run-one")
+        .arg(&job_file)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    let mut child = cmd.spawn().context("cannot start a child radlab process")?;
+    let mut stderr = child.stderr.take();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(e) = stderr.as_mut() {
+            let _ = e.read_to_string(&mut s);
+        }
+        s
+    });
+    let deadline = Instant::now() + Duration::from_secs_f64(job.limits.kill_after_secs());
+    let status = loop {
+        if let Some(st) = child.try_wait()? {
+            break Some(st);
+        }
+        if Instant::now() >= deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let err_text = reader.join().unwrap_or_default();
+    let _ = std::fs::remove_file(&job_file);
+    if let (Some(st), Ok(r)) = (status, read_result(&result_file)) {
+        if st.success() || r.outcome == "out-of-memory" {
+            return Ok(r);
+        }
+    }
+    let mut r = base_result(job);
+    let tail: String = err_text
+        .lines()
+        .rev()
+        .take(5)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .collect::<Vec<_>>()
+        .join(" | ");
+    match status {
+        None => {
+            r.outcome = "timeout".into();
+            r.message = format!(
+                "killed after {:.0} s (limits.kill_after)",
+                job.limits.kill_after_secs()
+            );
+        }
+        Some(st) => {
+            r.outcome = "crash".into();
+            r.message = format!("child exited with {st}: {tail}");
+        }
+    }
+    write_result(&job.dir, &r)?;
+    Ok(r)
+}

@@ -1,0 +1,126 @@
+//! The method registry: every solver radlab can run, by name, with its parameters and defaults. A new solver
+//! crate plugs in here with one entry; nothing else in the runner changes.
+
+use radlab_scene::{Accel, MethodParams, Scene, SolveError, Solver};
+
+/// Builds a solver from the scene, its accelerator, a parameter table and a seed.
+pub type BuildFn =
+    for<'a> fn(&'a Scene, &'a Accel, toml::Table, u64) -> Result<Box<dyn Solver + 'a>, SolveError>;
+
+/// One documented parameter.
+#[derive(Clone, Debug)]
+pub struct ParamLine {
+    /// Name (the key of `--set key=value`).
+    pub name: String,
+    /// Default value, TOML syntax.
+    pub default: String,
+    /// What it does.
+    pub doc: String,
+}
+
+/// A registered method.
+pub struct MethodInfo {
+    /// Name for `--method`.
+    pub name: &'static str,
+    /// One paragraph: what it is and when to use it.
+    pub summary: &'static str,
+    /// Its parameters.
+    pub params: fn() -> Vec<ParamLine>,
+    /// Builds the solver.
+    pub build: BuildFn,
+    /// Checks a parameter table without a scene (config validation).
+    pub validate: fn(toml::Table) -> Result<(), SolveError>,
+}
+
+/// Parameter lines of a params type: its docs with its defaults.
+pub fn param_lines<P: MethodParams>() -> Vec<ParamLine> {
+    let defaults = P::default_values();
+    P::docs()
+        .into_iter()
+        .map(|(name, doc)| ParamLine {
+            name: name.to_string(),
+            default: defaults
+                .iter()
+                .find(|(k, _)| k == name)
+                .map_or_else(|| "(none)".to_string(), |(_, v)| v.clone()),
+            doc: doc.to_string(),
+        })
+        .collect()
+}
+
+macro_rules! method {
+    ($name:literal, $summary:expr, $params:ty, $solver:path) => {
+        MethodInfo {
+            name: $name,
+            summary: $summary,
+            params: param_lines::<$params>,
+            build: |scene, accel, table, seed| {
+                let params = <$params as MethodParams>::from_table(table)?;
+                Ok(Box::new(<$solver>::new(scene, accel, params, seed)?))
+            },
+            validate: |table| <$params as MethodParams>::from_table(table).map(|_| ()),
+        }
+    };
+}
+
+/// Every registered solver method.
+pub fn methods() -> Vec<MethodInfo> {
+    vec![
+        method!(
+            "matrix",
+            "Full form-factor matrix over a fixed element mesh; Jacobi, Gauss-Seidel or conjugate gradient. \
+             O(n^2) memory and assembly: the accuracy reference among finite-element methods for small meshes.",
+            radlab_matrix::MatrixParams,
+            radlab_matrix::MatrixSolver
+        ),
+        method!(
+            "progressive",
+            "Progressive refinement (Southwell shooting) with substructuring and adaptive subdivision: O(n) \
+             memory, a usable image after a few shots; the classic choice for simple scenes.",
+            radlab_progressive::ProgressiveParams,
+            radlab_progressive::ProgressiveSolver
+        ),
+        method!(
+            "hierarchical",
+            "Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991): quadtrees per input face, links refined by \
+             an oracle to a threshold epsilon, gather and push-pull, two-stage/interleaved/scheduled solution.",
+            radlab_hierarchical::HierarchicalParams,
+            radlab_hierarchical::HierarchicalSolver
+        ),
+        method!(
+            "mc-radiosity",
+            "Mesh-based Monte Carlo radiosity: particles shot from the emitters and deposited on a fixed element \
+             mesh, a batch per step; error falls as N^(-1/2). The Monte Carlo counterpart of matrix and progressive.",
+            radlab_pathtrace::McRadiosityParams,
+            radlab_pathtrace::McRadiositySolver
+        ),
+    ]
+}
+
+/// The method of that name, or an error listing the methods.
+pub fn find(name: &str) -> anyhow::Result<MethodInfo> {
+    let all = methods();
+    let names: Vec<&str> = all
+        .iter()
+        .map(|m| m.name)
+        .chain(std::iter::once(crate::pathtraced::NAME))
+        .collect();
+    all.into_iter().find(|m| m.name == name).ok_or_else(|| {
+        anyhow::anyhow!(
+            "unknown method '{name}'; methods are: {} (see `radlab methods`)",
+            names.join(", ")
+        )
+    })
+}
+
+/// Checks that `method` exists and `table` holds valid parameters for it.
+pub fn validate_params(method: &str, table: toml::Table) -> anyhow::Result<()> {
+    if method == crate::pathtraced::NAME {
+        anyhow::bail!(
+            "'{method}' is the reference estimator, not a stepped method; it cannot be run as an experiment method (configure it under [reference])"
+        );
+    }
+    let m = find(method)?;
+    (m.validate)(table)?;
+    Ok(())
+}

@@ -1,0 +1,295 @@
+//! End-to-end tests of `radlab solve`, `probe`, `render`, `scenes` and `methods`, and of their errors on bad
+//! input (clear message naming the file and row or field, non-zero exit, no panic, no half-written output).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn radlab(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_radlab"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("radlab runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn probe_rows(stdout: &[u8]) -> Vec<[f64; 6]> {
+    let mut r = csv::Reader::from_reader(stdout);
+    assert_eq!(
+        r.headers().expect("header").iter().collect::<Vec<_>>(),
+        ["x", "y", "z", "r", "g", "b"]
+    );
+    r.records()
+        .map(|rec| {
+            let rec = rec.expect("row");
+            let v: Vec<f64> = rec.iter().map(|s| s.parse().expect("number")).collect();
+            [v[0], v[1], v[2], v[3], v[4], v[5]]
+        })
+        .collect()
+}
+
+#[test]
+fn solve_cornell_writes_csv_ply_exr() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("cornell");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "solve",
+            "builtin:cornell?width=32&height=32",
+            "--method",
+            "matrix",
+            "--set",
+            "visibility=centre",
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let mut faces = csv::Reader::from_path(out.join("faces.csv")).expect("faces.csv");
+    let rows: Vec<_> = faces.records().map(|r| r.expect("row")).collect();
+    assert!(rows.len() > 20);
+    let ply = std::fs::read(out.join("radiosity.ply")).expect("ply");
+    assert!(ply.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
+    let img = radlab_runner::output::exr_image::read_exr(&out.join("image.exr")).expect("exr");
+    assert_eq!((img.width, img.height), (32, 32));
+    assert!(img.pixels.iter().any(|p| p.x > 0.0), "image is black");
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .expect("dir")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+#[test]
+fn probe_obj_furnace_at_0_999() {
+    // A closed cube from OBJ + MTL with Kd 0.999 and Ke 1: B = E/(1-rho) = 1000 E.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let points = tmp.path().join("points.csv");
+    std::fs::write(
+        &points,
+        "x,y,z\n0.5,0.5,0\n0.25,0.75,1\n0,0.3,0.6\n1,0.9,0.1\n0.5,0,0.5\n",
+    )
+    .expect("points");
+    let scene = repo().join("scenes/furnace-cube.obj");
+    for method in ["matrix", "pathtrace"] {
+        let mut args = vec![
+            "probe",
+            scene.to_str().expect("utf8"),
+            "--method",
+            method,
+            "--points",
+            points.to_str().expect("utf8"),
+        ];
+        if method == "pathtrace" {
+            args.extend(["--set", "samples=64"]);
+        }
+        let o = radlab(tmp.path(), &args);
+        assert!(o.status.success(), "{method}: {}", text(&o));
+        let rows = probe_rows(&o.stdout);
+        assert_eq!(rows.len(), 5);
+        for r in rows {
+            for c in 3..6 {
+                assert!((r[c] / 1000.0 - 1.0).abs() < 0.01, "{method}: {r:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn probe_keeps_input_order_and_rejects_bad_rows() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let p = tmp.path().join("p.csv");
+    std::fs::write(&p, "x,y,z,nx,ny,nz\n0.5,0.5,0,0,0,1\n0.5,0.5,1,0,0,-1\n").expect("write");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "probe",
+            "builtin:furnace-cube?reflectance=0.5",
+            "--method",
+            "matrix",
+            "--points",
+            p.to_str().expect("utf8"),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let rows = probe_rows(&o.stdout);
+    assert_eq!((rows[0][2], rows[1][2]), (0.0, 1.0));
+    for r in rows {
+        assert!((r[3] - 2.0).abs() < 2e-3, "{r:?}");
+    }
+    for (body, needle) in [
+        ("x,y,z\n0.5,0.5,0\n0.5,nan,0\n", "row 2"),
+        ("x,y,z\n0.5,0.5,0\n9,9,9\n", "row 2"),
+        ("x,y\n1,2\n", "x,y,z"),
+        ("x,y,z\n0.5,0.5\n", "row 1"),
+    ] {
+        std::fs::write(&p, body).expect("write");
+        let o = radlab(
+            tmp.path(),
+            &[
+                "probe",
+                "builtin:furnace-cube",
+                "--method",
+                "matrix",
+                "--points",
+                p.to_str().expect("utf8"),
+            ],
+        );
+        assert!(!o.status.success(), "accepted {body:?}");
+        let t = text(&o);
+        assert!(
+            t.contains("p.csv") && t.contains(needle) && !t.contains("panicked"),
+            "{body:?}: {t}"
+        );
+    }
+}
+
+#[test]
+fn bad_scene_method_and_parameters_are_clear_errors() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    for (args, needle) in [
+        (
+            vec!["solve", "builtin:nope", "--method", "matrix"],
+            "furnace-cube",
+        ),
+        (
+            vec!["solve", "builtin:furnace-cube", "--method", "nope"],
+            "unknown method 'nope'",
+        ),
+        (
+            vec![
+                "solve",
+                "builtin:furnace-cube",
+                "--method",
+                "matrix",
+                "--set",
+                "tolerance=-1",
+            ],
+            "tolerance",
+        ),
+        (
+            vec![
+                "solve",
+                "builtin:furnace-cube",
+                "--method",
+                "matrix",
+                "--set",
+                "colour=1",
+            ],
+            "colour",
+        ),
+        (
+            vec![
+                "solve",
+                "builtin:furnace-cube",
+                "--method",
+                "matrix",
+                "--set",
+                "novalue",
+            ],
+            "key=value",
+        ),
+        (
+            vec![
+                "solve",
+                "builtin:furnace-cube?reflectance=1.0",
+                "--method",
+                "matrix",
+            ],
+            "reflectance",
+        ),
+        (
+            vec!["solve", "missing.obj", "--method", "matrix"],
+            "missing.obj",
+        ),
+        (
+            vec![
+                "render",
+                "builtin:furnace-cube",
+                "--method",
+                "matrix",
+                "--out",
+                "x.exr",
+            ],
+            "no camera",
+        ),
+        (
+            vec![
+                "solve",
+                "builtin:furnace-cube?tessellation=40",
+                "--method",
+                "matrix",
+                "--set",
+                "memory_budget_mib=1",
+            ],
+            "MiB",
+        ),
+    ] {
+        let o = radlab(tmp.path(), &args);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        let t = text(&o);
+        assert!(
+            t.contains(needle) && !t.contains("panicked"),
+            "{args:?}: {t}"
+        );
+    }
+    assert!(!tmp.path().join("x.exr").exists());
+}
+
+#[test]
+fn render_pathtrace_writes_mean_and_stderr() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let out = tmp.path().join("pt.exr");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "render",
+            "builtin:cornell?width=16&height=16",
+            "--method",
+            "pathtrace",
+            "--set",
+            "samples_per_pixel=4",
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let mean = radlab_runner::output::exr_image::read_exr(&out).expect("mean");
+    let se = radlab_runner::output::exr_image::read_exr(&tmp.path().join("pt-stderr.exr"))
+        .expect("stderr");
+    assert_eq!((mean.width, se.width), (16, 16));
+    assert!(se.pixels.iter().all(|p| p.min_element() >= 0.0));
+}
+
+#[test]
+fn catalogues_list_everything() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let o = radlab(tmp.path(), &["methods"]);
+    assert!(o.status.success());
+    let t = text(&o);
+    for m in ["matrix", "pathtrace", "element_size"] {
+        assert!(t.contains(m), "methods lacks {m}");
+    }
+    let o = radlab(tmp.path(), &["scenes"]);
+    let t = text(&o);
+    for s in [
+        "builtin:cornell",
+        "builtin:furnace-cube",
+        "builtin:parallel-squares",
+    ] {
+        assert!(t.contains(s), "scenes lacks {s}");
+    }
+}

@@ -1,0 +1,340 @@
+//! End-to-end tests of `radlab run`, `plot` and `merge` on tiny experiments in temporary directories: the
+//! tables, figures and images exist and parse; complete runs are skipped; shards cover every run once; a
+//! crashing, timed-out or out-of-memory run is recorded and the experiment finishes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn radlab(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_radlab"));
+    c.current_dir(dir).args(args);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("radlab runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+const TINY: &str = r#"
+name = "tiny"
+description = "two scenes, two matrix settings"
+seeds = [1]
+[evaluation]
+points = 48
+[reference]
+samples = 64
+image_spp = 4
+[limits]
+time_limit = 20
+[outputs]
+image_width = 24
+image_height = 24
+image_spp = 1
+[[scenes]]
+scene = "builtin:furnace-cube?reflectance=0.6&tessellation=2"
+label = "furnace"
+[[scenes]]
+scene = "builtin:cornell"
+label = "cornell"
+[[methods]]
+method = "matrix"
+params = { visibility = "centre", quadrature = 1 }
+sweep = { iteration = ["jacobi", "conjugate-gradient"] }
+"#;
+
+fn write_config(dir: &Path, name: &str, body: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, body).expect("write config");
+    p
+}
+
+fn csv_rows(p: &Path) -> Vec<csv::StringRecord> {
+    let mut r = csv::Reader::from_path(p).expect("csv");
+    r.records().map(|x| x.expect("row")).collect()
+}
+
+#[test]
+fn tiny_experiment_end_to_end_then_skips() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let cfg = write_config(tmp.path(), "tiny.toml", TINY);
+    let out = tmp.path().join("out");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let runs = csv_rows(&out.join("runs.csv"));
+    assert_eq!(runs.len(), 4, "2 scenes x 2 sweep points");
+    let trace = csv_rows(&out.join("trace.csv"));
+    assert!(trace.len() >= 4);
+    let report = std::fs::read_to_string(out.join("report.md")).expect("report");
+    assert!(
+        report.contains("| matrix |") && report.contains("time to 1%"),
+        "{report}"
+    );
+    for f in [
+        "figures/convergence-cornell.png",
+        "figures/frontier-furnace.svg",
+        "images/contact-sheet-cornell.png",
+    ] {
+        assert!(out.join(f).exists(), "missing {f}");
+    }
+    let png = image::open(out.join("figures/frontier-cornell.png")).expect("PNG decodes");
+    assert!(png.width() > 100);
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("meta.json")).expect("meta"))
+            .expect("json");
+    assert_eq!(meta["runs_executed"], 4);
+    // The furnace's reference is analytic: its runs converge to a small error, with no noise floor.
+    let rdr = csv::Reader::from_path(out.join("runs.csv")).expect("csv");
+    let results: Vec<radlab_runner::experiment::execute::RunResult> =
+        rdr.into_deserialize().map(|r| r.expect("row")).collect();
+    for r in results.iter().filter(|r| r.scene == "furnace") {
+        assert_eq!(r.reference, "furnace");
+        assert_eq!(r.floor_l1, 0.0);
+        assert!(r.l1 < 1e-3, "{r:?}");
+        assert_eq!(r.outcome, "converged");
+    }
+    for r in results.iter().filter(|r| r.scene == "cornell") {
+        assert_eq!(r.reference, "pathtrace");
+        assert!(r.floor_l1 > 0.0 && r.l1.is_finite(), "{r:?}");
+    }
+    // Run again: everything is skipped.
+    let o = radlab(
+        tmp.path(),
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("0 runs executed, 4 skipped"),
+        "{}",
+        text(&o)
+    );
+    // plot redraws from the CSVs.
+    std::fs::remove_file(out.join("figures/frontier-cornell.png")).expect("rm");
+    let o = radlab(tmp.path(), &["plot", out.to_str().expect("utf8")], &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(out.join("figures/frontier-cornell.png").exists());
+}
+
+#[test]
+fn shards_cover_every_run_once_and_merge() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let body = TINY
+        .replace(
+            "[[scenes]]\nscene = \"builtin:cornell\"\nlabel = \"cornell\"\n",
+            "",
+        )
+        .replace("seeds = [1]", "seeds = [1, 2, 3]");
+    let cfg = write_config(tmp.path(), "tiny.toml", &body);
+    let mut ids = Vec::new();
+    let mut dirs = Vec::new();
+    for i in 0..3 {
+        let out = tmp.path().join(format!("shard{i}"));
+        let o = radlab(
+            tmp.path(),
+            &[
+                "run",
+                cfg.to_str().expect("utf8"),
+                "--out",
+                out.to_str().expect("utf8"),
+                "--shard",
+                &format!("{i}/3"),
+            ],
+            &[],
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        for r in csv_rows(&out.join("runs.csv")) {
+            ids.push(r[0].to_string());
+        }
+        dirs.push(out);
+    }
+    ids.sort();
+    let n = ids.len();
+    ids.dedup();
+    assert_eq!(n, 6, "1 scene x 2 sweep points x 3 seeds");
+    assert_eq!(ids.len(), 6, "no run in two shards");
+    let merged = tmp.path().join("merged");
+    let mut args = vec!["merge".to_string(), merged.display().to_string()];
+    args.extend(dirs.iter().map(|d| d.display().to_string()));
+    let o = radlab(
+        tmp.path(),
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &[],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(csv_rows(&merged.join("runs.csv")).len(), 6);
+    let o = radlab(
+        tmp.path(),
+        &["run", cfg.to_str().expect("utf8"), "--shard", "3/3"],
+        &[],
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("--shard"),
+        "{}",
+        text(&o)
+    );
+}
+
+#[test]
+fn crash_timeout_and_memory_limit_are_recorded() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let base = TINY.replace(
+        "[[scenes]]\nscene = \"builtin:cornell\"\nlabel = \"cornell\"\n",
+        "",
+    );
+    // A panicking child.
+    let cfg = write_config(tmp.path(), "crash.toml", &base);
+    let out = tmp.path().join("crash");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        &[("RADLAB_FAULT", "panic")],
+    );
+    assert!(o.status.success(), "the experiment finishes: {}", text(&o));
+    let runs = csv_rows(&out.join("runs.csv"));
+    assert_eq!(runs.len(), 2);
+    let header = csv::Reader::from_path(out.join("runs.csv"))
+        .expect("csv")
+        .headers()
+        .expect("h")
+        .clone();
+    let col = header
+        .iter()
+        .position(|h| h == "outcome")
+        .expect("outcome column");
+    assert!(runs.iter().all(|r| &r[col] == "crash"), "{runs:?}");
+    // A child killed for time.
+    let cfg = write_config(
+        tmp.path(),
+        "timeout.toml",
+        &base.replace("time_limit = 20", "time_limit = 20\nkill_after = 0.001"),
+    );
+    let out = tmp.path().join("timeout");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        csv_rows(&out.join("runs.csv"))
+            .iter()
+            .all(|r| &r[col] == "timeout")
+    );
+    // A child over its memory limit.
+    let cfg = write_config(
+        tmp.path(),
+        "oom.toml",
+        &base.replace("time_limit = 20", "time_limit = 20\nmemory_limit_mib = 1"),
+    );
+    let out = tmp.path().join("oom");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        csv_rows(&out.join("runs.csv"))
+            .iter()
+            .all(|r| &r[col] == "out-of-memory")
+    );
+}
+
+#[test]
+fn config_errors_name_the_key() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let cases = [
+        (
+            TINY.replace("seeds = [1]", "seeds = [1]\ncolour = 3"),
+            "colour",
+        ),
+        (
+            TINY.replace("points = 48", "points = 0"),
+            "evaluation.points",
+        ),
+        (
+            TINY.replace("time_limit = 20", "time_limit = -1"),
+            "limits.time_limit",
+        ),
+        (
+            TINY.replace("method = \"matrix\"", "method = \"nope\""),
+            "unknown method 'nope'",
+        ),
+        (
+            TINY.replace("quadrature = 1 }", "quadrature = 1, bogus = 2 }"),
+            "bogus",
+        ),
+        (
+            TINY.replace(
+                "iteration = [",
+                "element_size = { from = 0.1, to = 0.0, steps = 3 }, x = [",
+            ),
+            "sweep.element_size",
+        ),
+        (
+            TINY.replace(
+                "iteration = [\"jacobi\", \"conjugate-gradient\"]",
+                "iteration = []",
+            ),
+            "sweep.iteration",
+        ),
+        (TINY.replace("seeds = [1]", "seeds = []"), "seeds"),
+        (
+            TINY.replace("label = \"cornell\"", "label = \"furnace\""),
+            "used twice",
+        ),
+        (
+            TINY.replace("samples = 64", "samples = \"many\""),
+            "samples",
+        ),
+    ];
+    for (body, needle) in cases {
+        let cfg = write_config(tmp.path(), "bad.toml", &body);
+        let o = radlab(tmp.path(), &["run", cfg.to_str().expect("utf8")], &[]);
+        assert!(!o.status.success(), "accepted a bad config ({needle})");
+        let t = text(&o);
+        assert!(
+            t.contains(needle) && t.contains("bad.toml"),
+            "error for {needle} was: {t}"
+        );
+        assert!(!t.contains("panicked"), "{t}");
+    }
+    let o = radlab(tmp.path(), &["run", "missing.toml"], &[]);
+    assert!(!o.status.success() && text(&o).contains("missing.toml"));
+}
