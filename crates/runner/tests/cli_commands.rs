@@ -59,7 +59,8 @@ fn solve_cornell_writes_csv_ply_exr() {
     assert!(o.status.success(), "{}", text(&o));
     let mut faces = csv::Reader::from_path(out.join("faces.csv")).expect("faces.csv");
     let rows: Vec<_> = faces.records().map(|r| r.expect("row")).collect();
-    assert!(rows.len() > 20);
+    let scene = radlab_scene::load_scene("builtin:cornell").expect("cornell");
+    assert_eq!(rows.len(), scene.faces.len(), "one row per face");
     let ply = std::fs::read(out.join("radiosity.ply")).expect("ply");
     assert!(ply.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
     let img = radlab_runner::output::exr_image::read_exr(&out.join("image.exr")).expect("exr");
@@ -84,8 +85,10 @@ fn probe_obj_furnace_at_0_999() {
     )
     .expect("points");
     let scene = repo().join("scenes/furnace-cube.obj");
-    for method in ["matrix", "pathtrace"] {
-        let mut args = vec![
+    // The acceptance check, end to end from OBJ + MTL. Every solver crate tests the furnace at 0.999
+    // itself (the path tracer against its standard error).
+    for method in ["matrix"] {
+        let args = [
             "probe",
             scene.to_str().expect("utf8"),
             "--method",
@@ -93,9 +96,6 @@ fn probe_obj_furnace_at_0_999() {
             "--points",
             points.to_str().expect("utf8"),
         ];
-        if method == "pathtrace" {
-            args.extend(["--set", "samples=64"]);
-        }
         let o = radlab(tmp.path(), &args);
         assert!(o.status.success(), "{method}: {}", text(&o));
         let rows = probe_rows(&o.stdout);

@@ -228,6 +228,14 @@ fn crash_timeout_and_memory_limit_are_recorded() {
         .position(|h| h == "outcome")
         .expect("outcome column");
     assert!(runs.iter().all(|r| &r[col] == "crash"), "{runs:?}");
+    let msg = header
+        .iter()
+        .position(|h| h == "message")
+        .expect("message column");
+    assert!(
+        runs.iter().all(|r| r[msg].contains("injected fault")),
+        "{runs:?}"
+    );
     // A child killed for time.
     let cfg = write_config(
         tmp.path(),

@@ -1,21 +1,43 @@
 //! Ray casting over the scene's faces: closest hit and point-to-point visibility, on an obvhs compressed
 //! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion.
 //!
-//! Geometry is converted to f32 relative to the centre of the scene's bounds, so precision is relative to the
-//! scene's size and independent of where it sits. Rays that start or end on a surface ignore the faces they
-//! start and end on (by id) and keep a small gap scaled to the scene's size, so points lying exactly on
-//! surfaces, touching surfaces and shared edges are handled without self-intersection. Quads are split into two
-//! triangles; each triangle maps back to its face. Every ray cast is counted (relaxed atomic), so solvers can
-//! report rays in their stats. `Accel` is `Sync`: cast from any number of rayon threads.
+//! Two stages per candidate triangle. The BVH and a first triangle test run in f32 on coordinates normalised
+//! to the scene's bounds (centre at 0, diagonal [`NORMALISED_DIAGONAL`]), so their precision is relative to the
+//! scene's size and independent of its scale and position. The f32 test is a loose filter (barycentric
+//! tolerance [`F32_FILTER_BARY`]; ray origin moved back by [`F32_FILTER_SHIFT`], because obvhs's node test
+//! skips boxes the ray leaves within 1e-4 units of its origin, which would drop touching surfaces; primitive
+//! boxes padded by [`BOX_PAD_REL`]). The answer is then decided in f64 against the triangle's exact plane:
+//!
+//! - s = signed distance of the ray origin from the plane (positive in front), τ = [`PLANE_TOL_REL`] × diagonal.
+//!   A surface the origin lies on (|s| ≤ τ, origin in the closed polygon) is hit at t = 0 only if the ray
+//!   enters its back: a ray leaving a floor under a box resting on it meets the box's bottom, and a ray from a
+//!   point exactly on an edge or corner of an enclosure that heads through a neighbouring wall hits that wall
+//!   instead of leaking (the price: a ray from exactly the foot line of a box, leaving it upwards, meets the
+//!   box's bottom edge at t = 0). Otherwise that surface is ignored, so a point on a surface never hits
+//!   itself or its coplanar neighbours. Elsewhere the hit is at t = −s/(n·d) when the ray approaches the plane.
+//! - A segment between `p` and `q` is occluded only by a surface whose plane it crosses between its ends, both
+//!   ends farther than τ from the plane: surfaces that a segment only touches at an end (the surfaces its ends
+//!   lie on, shared edges, touching objects) never occlude it.
+//! - The hit point must lie in the triangle within τ (edge functions in f64), so rays through shared edges and
+//!   quad diagonals hit one of the neighbours rather than slipping between them.
+//!
+//! The distance of a hit is therefore exact to f64 rounding, and surfaces a millionth of the scene's size
+//! apart are told apart at any scale. Quads are split into two triangles; each triangle maps back to its face.
+//! Every ray cast is counted (relaxed atomic), so solvers can report rays in their stats. `Accel` is `Sync`:
+//! cast from any number of rayon threads.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
-use glam::{DVec3, Vec3A};
+use glam::{DVec3, UVec2, Vec3A};
 use obvhs::{
     BvhBuildParams,
-    cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
-    ray::{Ray as BvhRay, RayHit},
+    aabb::Aabb,
+    bvh2::reinsertion::ReinsertionOptimizer,
+    cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh},
+    ploc::PlocBuilder,
+    ray::Ray as BvhRay,
+    splits::split_aabbs_preset,
     triangle::Triangle,
 };
 
@@ -50,20 +72,34 @@ pub struct Hit {
     pub face: FaceId,
     /// Distance along the ray.
     pub t: f64,
-    /// The hit point, snapped onto the face's plane in f64.
+    /// The hit point, `origin + t dir`, on the plane of the triangle hit (to f64 rounding).
     pub point: DVec3,
 }
 
-/// BVH build quality. Radiosity scenes are enclosures, where rays start inside the geometry: there the
-/// reinsertion pass of the slower presets pays for itself many times over (ARCHITECTURE.md's measurements:
-/// about 5× faster closest-hit queries for `Quality` than `Fast` in a 100k-triangle room).
+/// What one ray's traversal visited: BVH nodes whose children's boxes were tested against the ray, and
+/// triangles tested (leaf primitives; with spatial splits a triangle may be tested more than once).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalCost {
+    /// Nodes visited (each tests up to 8 child boxes).
+    pub nodes: u32,
+    /// Triangles tested.
+    pub triangles: u32,
+}
+
+/// BVH build quality. `benches/rays.rs` measures the three on enclosures (rays leaving surface points):
+/// the Cornell box tessellated to 4·10⁴ triangles and a closed room with a bumped sphere of 10⁵ and 10⁶
+/// triangles. There all three presets visit the same number of nodes and triangles per ray (3.3–9.7 nodes,
+/// 4.2–4.7 triangles per closest hit, within 3% of each other) and cast rays at the same rate within the
+/// machine's noise, while `Quality` builds 5–13 times slower than `Fast` (20 s against 1.6 s for 10⁶
+/// triangles) and `Medium` 1.1–1.4 times. Only the 38-triangle Cornell box shows a difference (`Quality`
+/// visits 30% fewer nodes than `Fast`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AccelPreset {
-    /// obvhs `fast_build`: quickest build, slowest traversal.
+    /// obvhs `fast_build`: quickest build.
     Fast,
-    /// obvhs `medium_build`.
+    /// obvhs `medium_build`: about as quick to build as `Fast`.
     Medium,
-    /// obvhs `very_slow_build` (spatial pre-splits, full reinsertion): the default.
+    /// obvhs `very_slow_build` (spatial pre-splits, full reinsertion): the default; slow to build.
     #[default]
     Quality,
 }
@@ -78,19 +114,80 @@ impl AccelPreset {
     }
 }
 
-/// Relative gap (to the scene's bounding diagonal) kept between a ray's ends and the surfaces it starts and
-/// ends on. f32 resolves about 6e-8 of the scene's size; this is ~150 times that.
-pub const RAY_GAP_REL: f64 = 1e-5;
+/// Plane tolerance τ relative to the scene's bounding diagonal. A point within τ of a triangle's plane lies on
+/// it (it never hits it, except by entering its back; segments ending there are not occluded by it), and a
+/// hit point may lie up to τ outside a triangle's edges. f64 positions resolve about 1e-16 of their
+/// magnitude, which leaves room for points computed on faces (interpolated, or hits snapped to planes), while
+/// surfaces 1e-6 of the scene apart are still told apart by a factor 1000.
+pub const PLANE_TOL_REL: f64 = 1e-9;
+
+/// Barycentric slack of the f32 filter test. The filter only has to keep every true hit (f64 decides), and
+/// f32 barycentrics of a triangle 1e-3 of the scene's size are good to about 1e-4.
+pub const F32_FILTER_BARY: f32 = 1e-3;
+
+/// The scene's bounding diagonal in the f32 coordinates the BVH is built in. obvhs's node test skips boxes
+/// that the ray leaves within 1e-4 units of its origin (a fixed epsilon in `cwbvh::node`): at this size that
+/// is 1e-7 of the scene, whatever the scene's own units.
+pub const NORMALISED_DIAGONAL: f64 = 1e3;
+
+/// How far back, relative to the scene's diagonal, the f32 filter ray starts, so that surfaces at distance
+/// ≈ 0 from the true origin lie 100 times beyond obvhs's node epsilon. Also the slack on the filter's
+/// maximum distance.
+pub const F32_FILTER_SHIFT: f64 = 1e-5;
+
+/// Padding of every primitive box, relative to the scene's diagonal (about 30 f32 ulps at the scene's edge).
+/// A flat box (the triangles of one wall) has no thickness of its own: a ray through the box's edge at the
+/// very point where it meets the wall, as rays from points on shared edges do, would otherwise slip past it.
+pub const BOX_PAD_REL: f64 = 1e-6;
+
+/// The BVH over `tris`: obvhs's PLOC build (optionally with spatial pre-splits), reinsertion and conversion to
+/// a CwBvh, over primitive boxes padded by [`BOX_PAD_REL`] (the steps of obvhs's `build_cwbvh_from_tris`,
+/// which offers no padding).
+fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
+    let mut boxes: Vec<Aabb> = tris.iter().map(Triangle::aabb).collect();
+    let mut indices: Vec<u32> = (0..tris.len() as u32).collect();
+    if params.pre_split && !tris.is_empty() {
+        let (largest, sum) = boxes.iter().fold((0f32, 0f32), |(l, s), b| {
+            let h = b.half_area();
+            (l.max(h), s + h)
+        });
+        split_aabbs_preset(
+            &mut boxes,
+            &mut indices,
+            tris,
+            sum / tris.len() as f32,
+            largest,
+        );
+    }
+    let pad = Vec3A::splat((BOX_PAD_REL * NORMALISED_DIAGONAL) as f32);
+    for b in &mut boxes {
+        b.min -= pad;
+        b.max += pad;
+    }
+    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+        params.ploc_search_distance,
+        &boxes,
+        indices,
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    bvh2.uses_spatial_splits = params.pre_split;
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+}
 
 /// The scene's acceleration structure and ray counter.
 pub struct Accel {
     bvh: CwBvh,
+    /// Triangles in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal.
     tris: Vec<Triangle>,
     tri_face: Vec<u32>,
-    normals: Vec<DVec3>,
-    plane_d: Vec<f64>,
+    tri_verts: Vec<[u32; 3]>,
+    /// The scene's vertices in f64, relative to `offset`.
+    verts: Vec<DVec3>,
     offset: DVec3,
-    gap: f64,
+    inv_scale: f64,
+    tol: f64,
     rays: AtomicU64,
     build_time: Duration,
 }
@@ -99,9 +196,30 @@ impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
             .field("triangles", &self.tris.len())
-            .field("gap", &self.gap)
+            .field("plane_tolerance", &self.tol)
             .finish()
     }
+}
+
+/// Loose f32 ray-triangle test (Möller & Trumbore 1997) with barycentric slack: true for every triangle the
+/// ray may hit within [0, tmax].
+#[inline(always)]
+fn f32_filter(tri: &Triangle, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+    let e1 = tri.v1 - tri.v0;
+    let e2 = tri.v2 - tri.v0;
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let tv = o - tri.v0;
+    let u = tv.dot(pv) * inv;
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    let t = e2.dot(qv) * inv;
+    let eps = F32_FILTER_BARY;
+    u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= 0.0 && t <= tmax
 }
 
 impl Accel {
@@ -114,52 +232,49 @@ impl Accel {
     pub fn with_preset(scene: &Scene, preset: AccelPreset) -> Self {
         let (lo, hi) = scene.bounds();
         let offset = 0.5 * (lo + hi);
-        let to32 = |p: DVec3| Vec3A::from((p - offset).as_vec3());
+        let scale = scene.diagonal().max(f64::MIN_POSITIVE);
+        let inv_scale = NORMALISED_DIAGONAL / scale;
+        let verts: Vec<DVec3> = scene.vertices.iter().map(|&p| p - offset).collect();
+        let to32 = |i: u32| Vec3A::from((verts[i as usize] * inv_scale).as_vec3());
         let mut tris = Vec::with_capacity(scene.faces.len() * 2);
         let mut tri_face = Vec::with_capacity(scene.faces.len() * 2);
+        let mut tri_verts = Vec::with_capacity(scene.faces.len() * 2);
         for (f, face) in scene.faces.iter().enumerate() {
-            let v = |k: usize| to32(scene.vertices[face.indices[k] as usize]);
-            tris.push(Triangle {
-                v0: v(0),
-                v1: v(1),
-                v2: v(2),
-            });
-            tri_face.push(f as u32);
-            if face.vertex_count() == 4 {
+            let idx = face.indices;
+            let mut push = |a: u32, b: u32, c: u32| {
                 tris.push(Triangle {
-                    v0: v(0),
-                    v1: v(2),
-                    v2: v(3),
+                    v0: to32(a),
+                    v1: to32(b),
+                    v2: to32(c),
                 });
                 tri_face.push(f as u32);
+                tri_verts.push([a, b, c]);
+            };
+            push(idx[0], idx[1], idx[2]);
+            if face.vertex_count() == 4 {
+                push(idx[0], idx[2], idx[3]);
             }
         }
-        let mut build_time = Duration::default();
         let start = std::time::Instant::now();
-        let bvh = build_cwbvh_from_tris(&tris, preset.params(), &mut build_time);
+        let bvh = build_bvh(&tris, preset.params());
         let build_time = start.elapsed();
-        let normals = scene.faces.iter().map(|f| f.normal).collect();
-        let plane_d = scene
-            .faces
-            .iter()
-            .map(|f| f.normal.dot(f.centroid))
-            .collect();
         Self {
             bvh,
             tris,
             tri_face,
-            normals,
-            plane_d,
+            tri_verts,
+            verts,
             offset,
-            gap: RAY_GAP_REL * scene.diagonal().max(f64::MIN_POSITIVE),
+            inv_scale,
+            tol: PLANE_TOL_REL * scale,
             rays: AtomicU64::new(0),
             build_time,
         }
     }
 
-    /// The gap kept at ray ends, in scene units.
-    pub fn gap(&self) -> f64 {
-        self.gap
+    /// The plane tolerance τ in scene units ([`PLANE_TOL_REL`] × the scene's diagonal).
+    pub fn plane_tolerance(&self) -> f64 {
+        self.tol
     }
 
     /// Wall time the BVH build took.
@@ -181,100 +296,203 @@ impl Accel {
     pub fn bytes(&self) -> usize {
         self.bvh.nodes.len() * 80
             + self.bvh.primitive_indices.len() * 4
-            + self.tris.len() * (size_of::<Triangle>() + 4)
-            + self.normals.len() * (size_of::<DVec3>() + 8)
+            + self.tris.len() * (size_of::<Triangle>() + 4 + 12)
+            + self.verts.len() * size_of::<DVec3>()
     }
 
-    fn bvh_ray(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> BvhRay {
-        let o = Vec3A::from((origin - self.offset).as_vec3());
-        let d = Vec3A::from(dir.as_vec3());
+    /// The f32 filter ray from `o` (relative to `offset`) along `dir`, reaching `tmax` scene units.
+    fn filter_ray(&self, o: DVec3, dir: DVec3, tmax: f64) -> BvhRay {
+        let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
+        let origin = Vec3A::from((o * self.inv_scale - shift * dir).as_vec3());
         let tmax = if tmax.is_finite() {
-            tmax as f32
+            (tmax * self.inv_scale + 2.0 * shift) as f32
         } else {
             f32::INFINITY
         };
-        BvhRay::new(o, d, tmin as f32, tmax)
+        BvhRay::new(origin, Vec3A::from(dir.as_vec3()), 0.0, tmax)
     }
 
-    /// Closest hit along the ray, if any.
+    fn triangle(&self, tri: usize) -> (DVec3, DVec3, DVec3, DVec3) {
+        let [a, b, c] = self.tri_verts[tri].map(|i| self.verts[i as usize]);
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        (a, b, c, n)
+    }
+
+    /// Whether `x` (in the plane of triangle a, b, c with unit normal n) lies inside it within τ.
+    fn inside(&self, a: DVec3, b: DVec3, c: DVec3, n: DVec3, x: DVec3) -> bool {
+        [(a, b), (b, c), (c, a)].iter().all(|&(p0, p1)| {
+            let e = p1 - p0;
+            n.dot(e.cross(x - p0)) >= -self.tol * e.length()
+        })
+    }
+
+    /// The f64 hit distance of the ray (origin `o` relative to `offset`, unit `dir`) on triangle `tri`.
+    fn exact_hit(&self, tri: usize, o: DVec3, dir: DVec3) -> Option<f64> {
+        let (a, b, c, n) = self.triangle(tri);
+        if n == DVec3::ZERO {
+            return None;
+        }
+        let s = n.dot(o - a);
+        let dn = n.dot(dir);
+        if s.abs() <= self.tol {
+            // The origin lies on this triangle's plane: hit at once only if the ray enters its back from a
+            // point of the (closed) triangle.
+            return (dn < 0.0 && self.inside(a, b, c, n, o)).then_some(0.0);
+        }
+        if s * dn < 0.0 {
+            let t = -s / dn;
+            return self.inside(a, b, c, n, o + t * dir).then_some(t);
+        }
+        None
+    }
+
+    /// Closest hit along the ray, if any. Surfaces the origin lies on are not hit unless the ray enters
+    /// their back (see the module documentation).
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.closest(ray.origin, ray.dir, 0.0, ray.tmax, usize::MAX)
+        self.closest(ray.origin, ray.dir, ray.tmax, usize::MAX).0
     }
 
     /// Closest hit along a ray leaving face `from` at `origin` (a point on that face): the face itself is
-    /// ignored and hits closer than the gap are ignored.
+    /// never hit, nor are its coplanar neighbours.
     pub fn intersect_from(&self, from: FaceId, origin: DVec3, dir: DVec3) -> Option<Hit> {
-        self.closest(origin, dir, self.gap, f64::INFINITY, from)
+        self.closest(origin, dir, f64::INFINITY, from).0
+    }
+
+    /// [`Accel::intersect`], also returning what the traversal visited: the cost of a ray, independent of
+    /// the machine, for benchmarks and for choosing an [`AccelPreset`].
+    pub fn intersect_counting(&self, ray: &Ray) -> (Option<Hit>, TraversalCost) {
+        self.closest(ray.origin, ray.dir, ray.tmax, usize::MAX)
     }
 
     fn closest(
         &self,
         origin: DVec3,
         dir: DVec3,
-        tmin: f64,
         tmax: f64,
         skip: FaceId,
-    ) -> Option<Hit> {
+    ) -> (Option<Hit>, TraversalCost) {
+        let mut cost = TraversalCost::default();
+        if !(origin.is_finite() && dir.is_finite()) {
+            debug_assert!(
+                false,
+                "ray with non-finite origin {origin:?} or direction {dir:?}"
+            );
+            return (None, cost);
+        }
         self.rays.fetch_add(1, Ordering::Relaxed);
-        let ray = self.bvh_ray(origin, dir, tmin, tmax);
-        let mut hit = RayHit::none();
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let tri = self.bvh.primitive_indices[id] as usize;
-            if self.tri_face[tri] as usize == skip {
-                return f32::INFINITY;
+        let o = origin - self.offset;
+        let mut ray = self.filter_ray(o, dir, tmax);
+        let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
+        let mut best: Option<(usize, f64)> = None;
+        // obvhs's closest-hit traversal (its `traverse!` macro, as in `CwBvh::ray_traverse`), counting the
+        // nodes and triangles it visits.
+        let mut state = self.bvh.new_traversal(ray.direction);
+        let mut node;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            {
+                cost.nodes += 1;
+                node.intersect_ray(&ray, state.oct_inv4)
+            },
+            {
+                cost.triangles += 1;
+                let tri = self.bvh.primitive_indices[state.primitive_id as usize] as usize;
+                let face = self.tri_face[tri] as usize;
+                let candidate = face != skip
+                    && f32_filter(&self.tris[tri], ray.origin, ray.direction, ray.tmax);
+                if let Some(t) = candidate.then(|| self.exact_hit(tri, o, dir)).flatten() {
+                    let better = match best {
+                        None => t <= tmax,
+                        Some((_, bt)) => t < bt,
+                    };
+                    if better {
+                        best = Some((face, t));
+                        // Shrink the traversal's reach to this hit, with the filter's slack.
+                        ray.tmax = ray.tmax.min((t * self.inv_scale + 2.0 * shift) as f32);
+                    }
+                }
             }
-            self.tris[tri].intersect(r)
-        });
-        if !found {
-            return None;
-        }
-        let tri = self.bvh.primitive_indices[hit.primitive_id as usize] as usize;
-        let face = self.tri_face[tri] as usize;
-        // Refine t in f64 against the face's plane for an accurate hit point.
-        let n = self.normals[face];
-        let denom = n.dot(dir);
-        let mut t = hit.t as f64;
-        if denom.abs() > 1e-12 {
-            let t64 = (self.plane_d[face] - n.dot(origin)) / denom;
-            if t64.is_finite() && (t64 - t).abs() < 1e-3 * t.max(self.gap) + 4.0 * self.gap {
-                t = t64;
-            }
-        }
-        Some(Hit {
+        );
+        let hit = best.map(|(face, t)| Hit {
             face,
             t,
             point: origin + t * dir,
-        })
+        });
+        (hit, cost)
     }
 
-    /// Whether the segment between `p` and `q` is unobstructed, for points that may lie on surfaces: a gap
-    /// at both ends keeps the surfaces they lie on from occluding.
+    /// Whether the segment between `p` and `q` is unobstructed, for points that may lie on surfaces: a
+    /// surface the segment only touches at an end never occludes it.
     pub fn visible(&self, p: DVec3, q: DVec3) -> bool {
-        self.visible_ignoring(p, q, usize::MAX, usize::MAX)
+        self.visible_ignoring(p, q, usize::MAX, usize::MAX).0
     }
 
     /// Whether the segment from `p` on face `fp` to `q` on face `fq` is unobstructed; the two end faces
     /// are ignored (pass `usize::MAX` for a point on no face).
     pub fn visible_between(&self, p: DVec3, fp: FaceId, q: DVec3, fq: FaceId) -> bool {
-        self.visible_ignoring(p, q, fp, fq)
+        self.visible_ignoring(p, q, fp, fq).0
     }
 
-    fn visible_ignoring(&self, p: DVec3, q: DVec3, fp: FaceId, fq: FaceId) -> bool {
+    /// [`Accel::visible`], also returning what the traversal visited.
+    pub fn visible_counting(&self, p: DVec3, q: DVec3) -> (bool, TraversalCost) {
+        self.visible_ignoring(p, q, usize::MAX, usize::MAX)
+    }
+
+    fn visible_ignoring(
+        &self,
+        p: DVec3,
+        q: DVec3,
+        fp: FaceId,
+        fq: FaceId,
+    ) -> (bool, TraversalCost) {
+        let mut cost = TraversalCost::default();
         let d = q - p;
         let len = d.length();
-        if !(len > 2.0 * self.gap) {
-            return true;
+        if !(len > 0.0 && len.is_finite()) {
+            debug_assert!(len == 0.0, "segment with non-finite ends {p:?} {q:?}");
+            return (true, cost);
         }
         self.rays.fetch_add(1, Ordering::Relaxed);
         let dir = d / len;
-        let ray = self.bvh_ray(p, dir, self.gap, len - self.gap);
-        self.bvh.ray_traverse_miss(ray, |r, id| {
-            let tri = self.bvh.primitive_indices[id] as usize;
-            let f = self.tri_face[tri] as usize;
-            if f == fp || f == fq {
-                return f32::INFINITY;
-            }
-            self.tris[tri].intersect(r)
-        })
+        let (p, q) = (p - self.offset, q - self.offset);
+        let ray = self.filter_ray(p, dir, len);
+        let tol = self.tol;
+        let mut visible = true;
+        // obvhs's any-hit traversal (as in `CwBvh::ray_traverse_miss`), counting nodes and triangles.
+        let mut state = self.bvh.new_traversal(ray.direction);
+        let mut node;
+        'traversal: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                {
+                    cost.nodes += 1;
+                    node.intersect_ray(&ray, state.oct_inv4)
+                },
+                {
+                    cost.triangles += 1;
+                    let tri = self.bvh.primitive_indices[state.primitive_id as usize] as usize;
+                    let f = self.tri_face[tri] as usize;
+                    if f != fp
+                        && f != fq
+                        && f32_filter(&self.tris[tri], ray.origin, ray.direction, ray.tmax)
+                    {
+                        let (a, b, c, n) = self.triangle(tri);
+                        let (sp, sq) = (n.dot(p - a), n.dot(q - a));
+                        // Only a plane crossed between the ends, both ends clear of it, can occlude.
+                        if ((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
+                            && self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                        {
+                            visible = false;
+                            break 'traversal;
+                        }
+                    }
+                }
+            );
+        }
+        (visible, cost)
     }
 }

@@ -1,12 +1,13 @@
 //! A pinhole camera and primary-ray rendering of any [`Solution`]: each pixel shows the radiance
 //! L = B/π (W/m²/sr) of the first surface its ray hits (a diffuse surface's radiance is its radiosity over π),
-//! averaged over jittered sub-pixel samples. Rows are rendered in parallel; sample positions derive from
+//! averaged over jittered sub-pixel samples. Surfaces are one-sided: a face seen from behind is black, as in the
+//! path tracer. Rows are rendered in parallel; sample positions derive from
 //! (seed, pixel), so the image does not depend on the thread count.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::{Accel, Ray, Rgb, Solution, sampling};
+use crate::{Accel, Ray, Rgb, Scene, Solution, sampling};
 
 /// A pinhole camera.
 #[derive(Clone, Debug, PartialEq)]
@@ -92,6 +93,7 @@ impl Image {
 /// Renders the radiance B/π of `solution` seen through `camera`, `spp` jittered samples per pixel
 /// (1 = pixel centres). Rays that escape the scene are black.
 pub fn render_solution(
+    scene: &Scene,
     accel: &Accel,
     camera: &Camera,
     solution: &dyn Solution,
@@ -115,7 +117,9 @@ pub fn render_solution(
                         (sampling::uniform(&mut r), sampling::uniform(&mut r))
                     };
                     let ray = camera.ray(x as f64 + jx, y as f64 + jy);
-                    if let Some(hit) = accel.intersect(&ray) {
+                    if let Some(hit) = accel.intersect(&ray)
+                        && scene.faces[hit.face].normal.dot(ray.dir) < 0.0
+                    {
                         sum += solution.radiosity_at(hit.face, hit.point) / std::f64::consts::PI;
                     }
                 }

@@ -1,5 +1,7 @@
-//! Evaluation points: deterministic, area-stratified points over every non-emitting face, the same for every
-//! method and the reference (ARCHITECTURE.md, "Conventions that make comparisons fair").
+//! Evaluation points: deterministic, area-stratified points over every non-emitting face (over every face when
+//! all of them emit, as in a furnace), the same for every method and the reference (ARCHITECTURE.md,
+//! "Conventions that make comparisons fair"). Emitters are left out otherwise because their radiosity is
+//! dominated by their own emission, which every method gets exactly right.
 //!
 //! Faces are laid end to end by area into [0, A_total); point i is placed at (i + ξ_i)/N · A_total in that
 //! line (stratified sampling of the area measure), which picks its face, and the remainder of the position
@@ -23,11 +25,14 @@ pub struct EvalPoint {
     pub weight: f64,
 }
 
-/// `count` evaluation points over the non-emitting faces, from `seed`. Empty if no face is non-emitting.
+/// `count` evaluation points over the non-emitting faces (all faces if every face emits), from `seed`.
 pub fn evaluation_points(scene: &Scene, count: usize, seed: u64) -> Vec<EvalPoint> {
-    let faces: Vec<FaceId> = (0..scene.faces.len())
+    let mut faces: Vec<FaceId> = (0..scene.faces.len())
         .filter(|&f| !scene.material(f).is_emitter())
         .collect();
+    if faces.is_empty() {
+        faces = (0..scene.faces.len()).collect();
+    }
     let mut cum = Vec::with_capacity(faces.len() + 1);
     let mut total = 0.0;
     cum.push(0.0);
@@ -55,4 +60,31 @@ pub fn evaluation_points(scene: &Scene, count: usize, seed: u64) -> Vec<EvalPoin
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_cover_non_emitters_by_area_and_furnaces_entirely() {
+        let s = crate::builtin("parallel-squares?tessellation=3").expect("scene");
+        let pts = evaluation_points(&s, 900, 5);
+        assert_eq!(pts.len(), 900);
+        assert!(pts.iter().all(|p| !s.material(p.face).is_emitter()));
+        // Stratified by area: each of the 9 equal receiver faces gets 100 points exactly.
+        for f in 0..s.faces.len() {
+            let n = pts.iter().filter(|p| p.face == f).count();
+            assert!(n == 0 || n == 100, "face {f}: {n}");
+        }
+        assert!((pts.iter().map(|p| p.weight).sum::<f64>() - 1.0).abs() < 1e-12);
+        let furnace = crate::builtin("furnace-cube?tessellation=2").expect("furnace");
+        let pts = evaluation_points(&furnace, 240, 5);
+        assert_eq!(pts.len(), 240);
+        assert!(
+            pts.iter()
+                .all(|p| furnace.polygon(p.face).contains(p.point, 1e-9))
+        );
+        assert_eq!(evaluation_points(&furnace, 240, 5), pts, "deterministic");
+    }
 }

@@ -214,8 +214,10 @@ impl Polygon {
         }
     }
 
-    /// Regular subdivision into pieces no longer than `size` along an edge (at least one piece): a quad into a
-    /// nu × nv bilinear grid, a triangle into m² triangles (m segments per edge).
+    /// Regular subdivision into pieces of about `size` (at least one piece): a quad into a nu × nv bilinear grid
+    /// (no piece longer than `size` along an edge), a triangle into m² similar triangles with m set by its
+    /// second-longest edge, so the two halves of a split quad get the same grid as the quad would (the longest
+    /// edge, their diagonal, would make them four times finer).
     pub fn subdivide(&self, size: f64) -> Vec<Polygon> {
         let v = &self.verts;
         let segs = |len: f64| -> usize {
@@ -243,8 +245,10 @@ impl Polygon {
             }
             out
         } else {
-            let m = segs(self.max_edge());
             let (a, b, c) = (v[0], v[1], v[2]);
+            let mut e = [(b - a).length(), (c - b).length(), (a - c).length()];
+            e.sort_by(f64::total_cmp);
+            let m = segs(e[1]);
             // Lattice point (i, j) = a + i/m (b - a) + j/m (c - a), i + j <= m.
             let p = |i: usize, j: usize| {
                 a + (b - a) * (i as f64 / m as f64) + (c - a) * (j as f64 / m as f64)
@@ -334,13 +338,32 @@ mod tests {
                 assert!((total - p.area()).abs() < 1e-12 * p.area(), "{p:?} {size}");
                 for k in &kids {
                     assert!(k.normal().dot(p.normal()) > 0.999_999);
-                    assert!(k.max_edge() <= size.max(p.max_edge()) + 1e-12);
+                    // Quads: no edge longer than the size. Triangles: the second-longest edge is.
+                    let mut e: Vec<f64> = (0..k.len())
+                        .map(|i| (k.vertices()[(i + 1) % k.len()] - k.vertices()[i]).length())
+                        .collect();
+                    e.sort_by(f64::total_cmp);
+                    let bound = if p.is_triangle() {
+                        e[1]
+                    } else {
+                        e[e.len() - 1]
+                    };
+                    assert!(bound <= size.max(p.max_edge()) + 1e-12);
                 }
             }
             let kids = p.split4();
             let total: f64 = kids.iter().map(|k| k.area()).sum();
             assert!((total - p.area()).abs() < 1e-12 * p.area());
         }
+    }
+
+    #[test]
+    fn half_of_a_quad_gets_the_quads_grid() {
+        let q = unit_quad();
+        let t = Polygon::triangle(dvec3(0., 0., 0.), dvec3(1., 0., 0.), dvec3(1., 1., 0.));
+        // 10 × 10 cells for the quad; its half gets 10² triangles, i.e. one per half cell.
+        assert_eq!(q.subdivide(0.1 + 1e-12).len(), 100);
+        assert_eq!(t.subdivide(0.1 + 1e-12).len(), 100);
     }
 
     #[test]

@@ -53,8 +53,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         return Ok(());
     }
     let solved = solve(&loaded, a)?;
-    let image =
-        radlab_scene::render_solution(&loaded.accel, &camera, solved.solution(), args.spp, a.seed);
+    let image = radlab_scene::render_solution(
+        &loaded.scene,
+        &loaded.accel,
+        &camera,
+        solved.solution(),
+        args.spp,
+        a.seed,
+    );
     write_exr(&args.out, &image)?;
     println!("wrote {}", args.out.display());
     Ok(())

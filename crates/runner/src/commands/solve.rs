@@ -161,7 +161,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     let mut written = vec!["faces.csv", "radiosity.ply"];
     if let Some(camera) = &scene.camera {
         let image =
-            radlab_scene::render_solution(&loaded.accel, camera, solution, args.spp, a.seed);
+            radlab_scene::render_solution(scene, &loaded.accel, camera, solution, args.spp, a.seed);
         exr_image::write_exr(&out.join("image.exr"), &image)?;
         written.push("image.exr");
     }

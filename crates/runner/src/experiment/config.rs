@@ -382,8 +382,10 @@ impl ExperimentConfig {
         if self.evaluation.every == 0 {
             bail!("evaluation.every: must be at least 1");
         }
-        if self.reference.samples == 0 || self.reference.image_spp == 0 {
-            bail!("reference.samples and reference.image_spp: must be at least 1");
+        if self.reference.samples < 2 || self.reference.image_spp < 2 {
+            bail!(
+                "reference.samples and reference.image_spp: must be at least 2 (a standard error needs two samples)"
+            );
         }
         let l = &self.limits;
         if !(l.time_limit > 0.0 && l.time_limit.is_finite()) {

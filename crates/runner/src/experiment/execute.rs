@@ -93,14 +93,19 @@ pub struct RunResult {
     /// Bytes the solver holds.
     pub bytes: u64,
     /// Final relative L1 error.
+    #[serde(deserialize_with = "nan_if_null")]
     pub l1: f64,
     /// Final relative L2 error.
+    #[serde(deserialize_with = "nan_if_null")]
     pub l2: f64,
     /// Final max relative error.
+    #[serde(deserialize_with = "nan_if_null")]
     pub max: f64,
     /// Reference noise floor, L1.
+    #[serde(deserialize_with = "nan_if_null")]
     pub floor_l1: f64,
     /// Reference noise floor, L2.
+    #[serde(deserialize_with = "nan_if_null")]
     pub floor_l2: f64,
     /// Reference kind.
     pub reference: String,
@@ -143,6 +148,12 @@ pub struct TraceRow {
     pub l2: f64,
     /// Max relative error.
     pub max: f64,
+}
+
+/// JSON has no NaN: serde_json writes it as `null`, which reads back as NaN here (the error of a run that
+/// failed before it could be evaluated).
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// Paths of a run's files.
@@ -301,6 +312,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     if job.outputs.images {
         if let Some(camera) = super::images::camera_for(&scene, &job.outputs) {
             let image = radlab_scene::render_solution(
+                &scene,
                 &accel,
                 &camera,
                 solver.solution(),
@@ -432,15 +444,12 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
         }
     }
     let mut r = base_result(job);
-    let tail: String = err_text
-        .lines()
-        .rev()
-        .take(5)
-        .collect::<Vec<_>>()
-        .into_iter()
-        .rev()
-        .collect::<Vec<_>>()
-        .join(" | ");
+    // The panic message if there is one (the line after "panicked at"), otherwise the last lines of stderr.
+    let lines: Vec<&str> = err_text.lines().collect();
+    let tail = match lines.iter().position(|l| l.contains("panicked at")) {
+        Some(i) => lines[i..(i + 2).min(lines.len())].join(" "),
+        None => lines[lines.len().saturating_sub(3)..].join(" | "),
+    };
     match status {
         None => {
             r.outcome = "timeout".into();

@@ -2,6 +2,13 @@
 //! unknown names and parameters are errors that list what exists.
 
 mod analytic;
+mod cornell;
+mod detailed_meshes;
+mod furnace_sphere;
+pub(crate) mod primitives;
+mod spectrum_rgb;
+
+pub use cornell::{cornell_fov_deg, cornell_light_exitance, cornell_reflectances};
 
 use glam::DVec3;
 
@@ -23,7 +30,11 @@ pub struct BuiltinInfo {
 
 /// Every builtin scene.
 pub fn builtins() -> Vec<BuiltinInfo> {
-    analytic::infos()
+    let mut all = analytic::infos();
+    all.extend(furnace_sphere::infos());
+    all.extend(cornell::infos());
+    all.extend(detailed_meshes::infos());
+    all
 }
 
 /// Parsed `k=v` arguments of a builtin spec, with typed getters that check ranges and name the parameter.

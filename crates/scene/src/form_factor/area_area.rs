@@ -1,14 +1,23 @@
 //! Area-to-area form factor with visibility (ALGORITHMS.md, "Area to area"):
 //!
-//! F_ij ≈ V_ij · (1/m) Σ_k F_{dA(x_k)→A_j},  x_k stratified over A_i,
+//! F_ij ≈ V_ij · Σ_k w_k F_{dA(x_k)→A_j},  (x_k, w_k) a product Gauss–Legendre rule over A_i,
 //!
 //! the receiver-side quadrature of the exact point-to-polygon kernel (so unoccluded point receivers are exact
 //! and the integrable singularity at contact is handled analytically), times a visibility fraction V_ij from
 //! rays between stratified, jittered points on both elements (Wallace, Elmquist & Haines 1989 use the same
 //! split of kernel and visibility). The ray count is a parameter ([`VisibilitySampling`]).
+//!
+//! The receiver rule is m × m Gauss–Legendre points over the bilinear parametrisation of a quad (a triangle is
+//! the quad a, b, c, c, collapsed at c), weighted by the parametrisation's Jacobian, so the weights are exact
+//! area fractions for any planar convex quad. The point kernel is analytic wherever the source lies wholly
+//! above the receiver's horizon, and there the rule converges exponentially in m (parallel unit squares at
+//! distance 1: relative error 2e-1, 7e-3, 8e-6, 4e-11 for m = 1, 2, 4, 8); where the source touches the
+//! receiver along a shared edge the kernel's derivatives are singular at the edge's ends and the error falls
+//! as m⁻⁴; where the source crosses the receiver's horizon the kernel has a kink and it falls as m⁻².
+//! m = 1 is the centroid. Any rule's weights sum to 1, so in a closed convex enclosure the unoccluded row sums
+//! Σ_j F_ij are 1 to rounding, as they are for every receiver point.
 
-use glam::DVec3;
-
+use super::gauss_legendre;
 use crate::{Accel, FaceId, Polygon, sampling};
 
 /// How a visibility fraction between two elements is estimated.
@@ -52,6 +61,12 @@ impl VisibilitySampling {
 
 /// Fraction of rays between element `a` (on face `fa`) and `b` (on face `fb`) that are unobstructed.
 /// `stream` selects the random stream (derive it from the pair's indices for determinism).
+///
+/// The n × n jittered samples on each element are paired through a random permutation of the strata, drawn
+/// afresh for every call: each ray then joins two points distributed uniformly and independently over the
+/// elements (for triangles and parallelograms), so the fraction is an unbiased estimate of the fraction of
+/// point pairs that see each other, while the samples stay stratified on both elements.
+#[allow(clippy::too_many_arguments)]
 pub fn visibility_fraction(
     accel: &Accel,
     a: &Polygon,
@@ -72,20 +87,25 @@ pub fn visibility_fraction(
             }
         }
         _ => {
-            let n = how.side();
-            let mut r = sampling::rng(seed, stream);
-            let mut seen = 0u32;
-            // Pair stratum k on `a` with stratum σ(k) on `b`, σ a fixed scramble, so the pairs cover both
-            // elements without correlating positions.
+            let n = how.side() as usize;
             let total = n * n;
-            for k in 0..total {
-                let (i, j) = (k % n, k / n);
-                let m = (k * 7 + 3) % total;
-                let (p, q) = (m % n, m / n);
+            let mut r = sampling::rng(seed, stream);
+            // Fisher–Yates shuffle of the strata of `b`.
+            let mut perm = [0u8; 64];
+            for (k, p) in perm.iter_mut().enumerate().take(total) {
+                *p = k as u8;
+            }
+            for k in (1..total).rev() {
+                let j = ((sampling::uniform(&mut r) * (k + 1) as f64) as usize).min(k);
+                perm.swap(k, j);
+            }
+            let mut seen = 0u32;
+            for (k, &m) in perm.iter().enumerate().take(total) {
+                let m = m as usize;
                 let u =
-                    |x: u32, r: &mut sampling::Rng| (x as f64 + sampling::uniform(r)) / n as f64;
-                let x = a.point_at(u(i, &mut r), u(j, &mut r));
-                let y = b.point_at(u(p, &mut r), u(q, &mut r));
+                    |x: usize, r: &mut sampling::Rng| (x as f64 + sampling::uniform(r)) / n as f64;
+                let x = a.point_at(u(k % n, &mut r), u(k / n, &mut r));
+                let y = b.point_at(u(m % n, &mut r), u(m / n, &mut r));
                 if accel.visible_between(x, fa, y, fb) {
                     seen += 1;
                 }
@@ -95,24 +115,38 @@ pub fn visibility_fraction(
     }
 }
 
-/// Unoccluded form factor from receiver polygon `recv` to source `src`: the mean of the point-to-polygon
-/// factor over `m × m` midpoint-stratified receiver points (m = 1: the centroid only).
+/// Unoccluded form factor from receiver polygon `recv` to the front of source `src`: the point-to-polygon
+/// factor integrated over the receiver with the m × m product Gauss–Legendre rule described in the module
+/// documentation (m = 1: the centroid only; m = 0 is taken as 1). Exact for point-like receivers; see the
+/// module documentation for how fast it converges in m.
 pub fn polygon_polygon_unoccluded(recv: &Polygon, src: &Polygon, m: u32) -> f64 {
     let n = recv.normal();
-    let m = m.max(1);
+    let m = m.max(1) as usize;
     if m == 1 {
         return super::point_polygon(recv.centroid(), n, src);
     }
-    let mut sum = 0.0;
-    for j in 0..m {
-        for i in 0..m {
-            let x: DVec3 = recv.point_at((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
-            sum += super::point_polygon(x, n, src);
+    let v = recv.vertices();
+    let (a, b, c, d) = if v.len() == 3 {
+        (v[0], v[1], v[2], v[2])
+    } else {
+        (v[0], v[1], v[2], v[3])
+    };
+    let rule = gauss_legendre::rule(m);
+    let (mut sum, mut area) = (0.0, 0.0);
+    for &(t, wt) in rule.iter() {
+        // Points along the edges a→b (t = 0) and d→c (t = 1), and the derivative along t.
+        for &(s, ws) in rule.iter() {
+            let p0 = a.lerp(b, s);
+            let p1 = d.lerp(c, s);
+            let x = p0.lerp(p1, t);
+            let ds = (b - a).lerp(c - d, t);
+            let jac = ds.cross(p1 - p0).length();
+            let w = wt * ws * jac;
+            sum += w * super::point_polygon(x, n, src);
+            area += w;
         }
     }
-    // point_at is uniform for triangles and parallelograms; weight by the local area for general quads
-    // would be more exact, but meshed elements are parallelograms or triangles.
-    sum / (m * m) as f64
+    if area > 0.0 { sum / area } else { 0.0 }
 }
 
 /// Form factor with visibility: unoccluded quadrature times the visibility fraction. Skips the rays when the

@@ -2,7 +2,9 @@
 //! estimate refinement oracles use, and Howell's closed forms to test them against.
 
 mod area_area;
+pub mod closed_form;
 mod estimate;
+pub mod gauss_legendre;
 mod point_polygon;
 
 pub use area_area::{

@@ -1,0 +1,269 @@
+//! Link creation and refinement (Hanrahan, Salzman & Aupperle 1991; survey 2.3.2 and 2.4.1).
+//!
+//! Initial links join every ordered pair of roots that can exchange light (for patches: input faces each
+//! partly in front of the other, with a non-zero transfer): the O(k²) start of classic hierarchical radiosity.
+//! Never a self-link between patches. With lazy linking (Holzschuch, Sillion & Drettakis 1994) the links from a
+//! root as a source are only made once it carries light.
+//!
+//! A refinement pass asks the oracle about every link once ([`crate::oracle::decide`]), splits the elements it
+//! names (lazily: a node gets its children the first time a link needs them), and replaces each refined link by
+//! the links between the children and the other end. Decisions and the new links' transfers run in parallel;
+//! the new nodes are numbered in a fixed order, and each link's rays come from a stream hashed from its two
+//! node ids, so the hierarchy is the same for any thread count.
+
+use radlab_scene::SolveError;
+use rayon::prelude::*;
+
+use crate::hierarchy::Engine;
+use crate::link::{Kernel, Link};
+use crate::node::NodeKind;
+use crate::oracle::{Action, decide, light_weight};
+
+impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
+    /// Whether root `r` carries light now (emits, or has received some).
+    pub(crate) fn root_is_lit(&self, r: u32) -> bool {
+        self.radiosity[r as usize].max_element() > 0.0
+            || self.nodes[r as usize].emission().max_element() > 0.0
+    }
+
+    /// Creates the initial links from every root in `new_sources` (as sources) to every root that can receive
+    /// from it, then marks them linked. Returns the number of links made.
+    pub(crate) fn link_roots(&mut self, new_sources: &[u32]) -> Result<usize, SolveError> {
+        let k = self.roots.len();
+        let mut is_new = vec![false; k];
+        for &s in new_sources {
+            is_new[s as usize] = true;
+        }
+        // Count candidate pairs first, so an impossible k² is refused before it is built.
+        let candidates: usize = (0..k)
+            .into_par_iter()
+            .map(|r| {
+                (0..k)
+                    .filter(|&s| {
+                        s != r
+                            && is_new[s]
+                            && self.kernel.may_interact(
+                                &self.nodes[self.roots[r] as usize],
+                                &self.nodes[self.roots[s] as usize],
+                            )
+                    })
+                    .count()
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .sum();
+        self.check_budget(candidates, 0)?;
+        let made: Vec<Vec<Link>> = (0..k)
+            .into_par_iter()
+            .map(|r| {
+                let rid = self.roots[r];
+                let recv = &self.nodes[rid as usize];
+                (0..k)
+                    .filter(|&s| s != r && is_new[s])
+                    .filter_map(|s| {
+                        let sid = self.roots[s];
+                        let src = &self.nodes[sid as usize];
+                        if self.kernel.may_interact(recv, src) {
+                            self.kernel.link(recv, rid, src, sid)
+                        } else {
+                            None
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut count = 0;
+        for (r, ls) in made.into_iter().enumerate() {
+            count += ls.len();
+            if !ls.is_empty() {
+                self.dirty[self.roots[r] as usize] = true;
+            }
+            self.links[self.roots[r] as usize].extend(ls);
+        }
+        self.form_factors += candidates as u64;
+        for &s in new_sources {
+            self.linked[s as usize] = true;
+        }
+        if count > 0 {
+            self.operator_changed();
+        }
+        Ok(count)
+    }
+
+    /// Adds the link `recv ← src` computed by the kernel (a volume-cluster method starts from its root's
+    /// self-link). Returns whether a link was made (the kernel may find nothing to transfer).
+    pub fn add_link(&mut self, recv: u32, src: u32) -> Result<bool, SolveError> {
+        let n = self.nodes.len() as u32;
+        if recv >= n || src >= n {
+            return Err(SolveError::param(
+                "link",
+                format!("node {recv} or {src} does not exist ({n} nodes)"),
+            ));
+        }
+        self.check_budget(1, 0)?;
+        self.form_factors += 1;
+        let l = self.kernel.link(
+            &self.nodes[recv as usize],
+            recv,
+            &self.nodes[src as usize],
+            src,
+        );
+        if let Some(l) = l {
+            self.links[recv as usize].push(l);
+            self.dirty[recv as usize] = true;
+            self.operator_changed();
+        }
+        Ok(l.is_some())
+    }
+
+    /// Marks every root as linked, so the schedule creates no initial links of its own (for methods that
+    /// start from links they add themselves).
+    pub fn skip_initial_links(&mut self) {
+        self.linked.iter_mut().for_each(|l| *l = true);
+    }
+
+    /// Roots that are lit but not yet linked as sources (all unlinked roots when `lazy` is false).
+    pub(crate) fn pending_sources(&self, lazy: bool) -> Vec<u32> {
+        (0..self.roots.len() as u32)
+            .filter(|&r| {
+                !self.linked[r as usize] && (!lazy || self.root_is_lit(self.roots[r as usize]))
+            })
+            .collect()
+    }
+
+    /// The area-mean radiosity of the scene (max channel): the BF and variation oracles' scale.
+    pub(crate) fn radiosity_scale(&self) -> f64 {
+        let (mut sum, mut area) = (radlab_scene::Rgb::ZERO, 0.0);
+        for &r in &self.roots {
+            let a = self.nodes[r as usize].area();
+            sum += a * self.radiosity[r as usize];
+            area += a;
+        }
+        if area > 0.0 {
+            (sum / area).max_element()
+        } else {
+            0.0
+        }
+    }
+
+    /// One refinement pass at threshold `epsilon`: each link is examined once. Returns the number of links
+    /// replaced.
+    pub(crate) fn refine_pass(&mut self, epsilon: f64) -> Result<usize, SolveError> {
+        let oracle = self.params.oracle;
+        let min_size = self.min_size;
+        let scale = self.radiosity_scale();
+        let decisions: Vec<Vec<Action>> = self
+            .links
+            .par_iter()
+            .enumerate()
+            .map(|(r, ls)| {
+                let recv = &self.nodes[r];
+                ls.iter()
+                    .map(|l| {
+                        let src = &self.nodes[l.source as usize];
+                        let w = light_weight(
+                            recv.reflectance(),
+                            self.radiosity[l.source as usize],
+                            scale,
+                        );
+                        decide(
+                            oracle,
+                            epsilon,
+                            min_size,
+                            recv,
+                            src,
+                            r as u32 == l.source,
+                            l,
+                            w,
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        // Elements to split, in id order.
+        let mut to_split = Vec::new();
+        for (r, (ls, ds)) in self.links.iter().zip(&decisions).enumerate() {
+            for (l, d) in ls.iter().zip(ds) {
+                if matches!(d, Action::SplitReceiver | Action::SplitBoth) {
+                    to_split.push(r as u32);
+                }
+                if matches!(d, Action::SplitSource | Action::SplitBoth) {
+                    to_split.push(l.source);
+                }
+            }
+        }
+        to_split.sort_unstable();
+        to_split.dedup();
+        to_split.retain(|&i| self.is_leaf(i));
+        let replaced: usize = decisions
+            .iter()
+            .map(|ds| ds.iter().filter(|d| **d != Action::Keep).count())
+            .sum();
+        if replaced == 0 {
+            return Ok(0);
+        }
+        self.check_budget(replaced * 16, to_split.len() * 4)?;
+        for i in to_split {
+            self.split_node(i);
+        }
+        // Replace refined links by links between children, in a fixed order.
+        let mut specs: Vec<(u32, u32)> = Vec::new();
+        for (r, ds) in decisions.iter().enumerate() {
+            if ds.iter().all(|d| *d == Action::Keep) {
+                continue;
+            }
+            let old = std::mem::take(&mut self.links[r]);
+            let mut kept = Vec::with_capacity(old.len());
+            for (l, d) in old.into_iter().zip(ds) {
+                let s = l.source;
+                match d {
+                    Action::Keep => kept.push(l),
+                    Action::SplitReceiver => {
+                        for c in self.children(r as u32) {
+                            specs.push((c, s));
+                        }
+                    }
+                    Action::SplitSource => {
+                        for c in self.children(s) {
+                            specs.push((r as u32, c));
+                        }
+                    }
+                    Action::SplitBoth => {
+                        for a in self.children(r as u32) {
+                            for b in self.children(s) {
+                                specs.push((a, b));
+                            }
+                        }
+                    }
+                }
+            }
+            self.links[r] = kept;
+            self.dirty[r] = true;
+        }
+        self.check_budget(specs.len(), 0)?;
+        let made: Vec<Option<Link>> = specs
+            .par_iter()
+            .map(|&(r, s)| {
+                self.kernel
+                    .link(&self.nodes[r as usize], r, &self.nodes[s as usize], s)
+            })
+            .collect();
+        self.form_factors += specs.len() as u64;
+        for ((r, _), l) in specs.into_iter().zip(made) {
+            if let Some(l) = l {
+                self.links[r as usize].push(l);
+                self.dirty[r as usize] = true;
+            }
+        }
+        self.operator_changed();
+        Ok(replaced)
+    }
+
+    /// Forget what the solver knew about the old operator.
+    pub(crate) fn operator_changed(&mut self) {
+        self.coarse_mu = None;
+        self.passes_since_change = 0;
+        self.last_norm = None;
+        self.converged = false;
+    }
+}

@@ -1,0 +1,137 @@
+//! The three ways to interleave link refinement with solution (survey 2.4.3), driven one pass per step:
+//!
+//! - two-stage: link all input faces, refine until no link changes (the oracle sees emission only), then
+//!   gather/push-pull until converged;
+//! - interleaved: link, then alternate one refinement pass (each link refined at most once) and one solution
+//!   pass, until a refinement pass changes nothing and the solution has converged;
+//! - scheduled: stage i refines at ε_i until no link changes, then solves to convergence; ε_{i+1} = ε_i / α
+//!   down to ε, then stages at ε until one changes nothing. With lazy linking each stage first links the
+//!   faces that received light in the previous one (Holzschuch, Sillion & Drettakis 1994), so with α = 1 the
+//!   stages are successive bounces.
+//!
+//! A step is one unit of work: a linking step, a refinement pass or a solution pass. Transitions that need no
+//! work happen inside the step that follows them.
+
+use radlab_scene::{SolveError, Step};
+
+use crate::hierarchy::{Engine, Phase};
+use crate::link::Kernel;
+use crate::node::NodeKind;
+use crate::params::Schedule;
+
+impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
+    /// The threshold of the current stage.
+    pub fn current_epsilon(&self) -> f64 {
+        match self.params.schedule {
+            Schedule::Scheduled => self.params.stage_epsilon(self.stage),
+            _ => self.params.epsilon,
+        }
+    }
+
+    fn lazy(&self) -> bool {
+        self.params.lazy_linking && self.params.schedule != Schedule::TwoStage
+    }
+
+    /// One unit of work of the schedule.
+    pub fn step(&mut self) -> Result<Step, SolveError> {
+        if self.phase == Phase::Done {
+            return Ok(Step::Converged);
+        }
+        if self.steps >= self.params.max_steps {
+            self.phase = Phase::Done;
+            return Ok(Step::Converged);
+        }
+        self.steps += 1;
+        let lazy = self.lazy();
+        loop {
+            match (self.params.schedule, self.phase) {
+                (_, Phase::Done) => return Ok(Step::Converged),
+                (Schedule::TwoStage, Phase::Link) => {
+                    let all = self.pending_sources(false);
+                    self.link_roots(&all)?;
+                    self.phase = Phase::Refine;
+                    return Ok(Step::Continue);
+                }
+                (Schedule::TwoStage, Phase::Refine) => {
+                    if self.refine_pass(self.params.epsilon)? == 0 {
+                        self.phase = Phase::Solve;
+                        continue;
+                    }
+                    return Ok(Step::Continue);
+                }
+                (Schedule::TwoStage, Phase::Solve) => {
+                    self.solve_pass()?;
+                    if self.converged {
+                        self.phase = Phase::Done;
+                        return Ok(Step::Converged);
+                    }
+                    return Ok(Step::Continue);
+                }
+                (Schedule::Interleaved, Phase::Link) => {
+                    let new = self.pending_sources(lazy);
+                    self.link_roots(&new)?;
+                    self.refine_changed = true;
+                    self.phase = Phase::Solve;
+                    return Ok(Step::Continue);
+                }
+                (Schedule::Interleaved, Phase::Refine) => {
+                    let new = self.pending_sources(lazy);
+                    let made = if new.is_empty() {
+                        0
+                    } else {
+                        self.link_roots(&new)?
+                    };
+                    let refined = self.refine_pass(self.params.epsilon)?;
+                    self.refine_changed = !new.is_empty() || made + refined > 0;
+                    self.phase = Phase::Solve;
+                    return Ok(Step::Continue);
+                }
+                (Schedule::Interleaved, Phase::Solve) => {
+                    self.solve_pass()?;
+                    if self.converged && !self.refine_changed {
+                        self.phase = Phase::Done;
+                        return Ok(Step::Converged);
+                    }
+                    self.phase = Phase::Refine;
+                    return Ok(Step::Continue);
+                }
+                (Schedule::Scheduled, Phase::Link) => {
+                    let new = self.pending_sources(lazy);
+                    self.phase = Phase::Refine;
+                    if new.is_empty() {
+                        continue;
+                    }
+                    self.link_roots(&new)?;
+                    self.stage_changed = true;
+                    return Ok(Step::Continue);
+                }
+                (Schedule::Scheduled, Phase::Refine) => {
+                    if self.refine_pass(self.current_epsilon())? > 0 {
+                        self.stage_changed = true;
+                        return Ok(Step::Continue);
+                    }
+                    self.phase = Phase::Solve;
+                    continue;
+                }
+                (Schedule::Scheduled, Phase::Solve) => {
+                    if !self.converged {
+                        self.solve_pass()?;
+                        if !self.converged {
+                            return Ok(Step::Continue);
+                        }
+                    }
+                    let last = self.stage + 1 >= self.params.stages;
+                    if last && !self.stage_changed {
+                        self.phase = Phase::Done;
+                        return Ok(Step::Converged);
+                    }
+                    self.stage += 1;
+                    self.stage_changed = false;
+                    self.phase = Phase::Link;
+                    // The pass just done was this step's work.
+                    return Ok(Step::Continue);
+                }
+            }
+        }
+    }
+}

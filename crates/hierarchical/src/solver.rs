@@ -1,0 +1,167 @@
+//! [`HierarchicalSolver`]: hierarchical radiosity over the quadtrees of a scene's input faces, driven through
+//! the [`Solver`] trait, and its [`Solution`]: radiosity constant per leaf, or vertex-interpolated
+//! ([`crate::gouraud`]), at any point of any face.
+
+use radlab_scene::{
+    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
+};
+use rayon::prelude::*;
+
+use crate::gouraud::{face_corner_values, interpolate};
+use crate::hierarchy::Engine;
+use crate::link::PatchKernel;
+use crate::locate::{insideness, param_coords, param_corners};
+use crate::node::Patch;
+use crate::params::{HierarchicalParams, Interpolation, MIN_ELEMENT_SIZE_REL};
+
+/// Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991) over a scene; see the crate documentation.
+#[derive(Debug)]
+pub struct HierarchicalSolver<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    engine: Engine<Patch, PatchKernel<'a>>,
+    corner_values: Vec<[Rgb; 4]>,
+    rays: u64,
+}
+
+impl<'a> HierarchicalSolver<'a> {
+    /// A solver for `scene` (ray cast through `accel`, built from the same scene) with `params` and `seed`.
+    /// Validates the parameters; no work is done until [`Solver::step`].
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: HierarchicalParams,
+        seed: u64,
+    ) -> Result<Self, SolveError> {
+        params.validate()?;
+        let min_size = params
+            .min_element_size
+            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
+        if !(min_size > 0.0 && min_size.is_finite()) {
+            return Err(SolveError::param(
+                "min_element_size",
+                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
+            ));
+        }
+        let roots = (0..scene.face_count())
+            .map(|f| Patch::root(scene, f))
+            .collect();
+        let kernel = PatchKernel::new(accel, params.quadrature, params.visibility, seed);
+        let engine = Engine::new(roots, kernel, params, min_size)?;
+        Ok(Self {
+            scene,
+            accel,
+            engine,
+            corner_values: Vec::new(),
+            rays: 0,
+        })
+    }
+
+    /// The engine: nodes, links and radiosity, for inspection and tests.
+    pub fn engine(&self) -> &Engine<Patch, PatchKernel<'a>> {
+        &self.engine
+    }
+
+    /// The scene solved.
+    pub fn scene(&self) -> &Scene {
+        self.scene
+    }
+
+    /// Leaf radiosity with each leaf's face and area: (face, area, B) per leaf, in node order.
+    pub fn leaves(&self) -> Vec<(FaceId, f64, Rgb)> {
+        let e = &self.engine;
+        (0..e.nodes().len() as u32)
+            .filter(|&i| e.is_leaf(i))
+            .map(|i| {
+                let p = &e.nodes()[i as usize];
+                (p.face, p.area, e.radiosity()[i as usize])
+            })
+            .collect()
+    }
+
+    /// The leaf of `face` containing `point` (the nearest one for points slightly outside).
+    pub fn locate(&self, face: FaceId, point: glam::DVec3) -> u32 {
+        let e = &self.engine;
+        let mut i = e.roots()[face];
+        let q = param_coords(&e.nodes()[i as usize].polygon, point);
+        while !e.is_leaf(i) {
+            let mut best = (f64::NEG_INFINITY, i);
+            for c in e.children(i) {
+                let (corners, n) = param_corners(&e.nodes()[c as usize]);
+                let d = insideness(&corners[..n], q);
+                if d > best.0 {
+                    best = (d, c);
+                }
+            }
+            i = best.1;
+        }
+        i
+    }
+
+    fn update_output(&mut self) {
+        if self.engine.params().interpolation != Interpolation::Gouraud {
+            return;
+        }
+        let e = &self.engine;
+        let per_face: Vec<Vec<(u32, [Rgb; 4])>> = e
+            .roots()
+            .par_iter()
+            .map(|&r| face_corner_values(e, r))
+            .collect();
+        let mut values = vec![[Rgb::ZERO; 4]; e.nodes().len()];
+        for list in per_face {
+            for (i, v) in list {
+                values[i as usize] = v;
+            }
+        }
+        self.corner_values = values;
+    }
+}
+
+impl Solution for HierarchicalSolver<'_> {
+    fn radiosity_at(&self, face: FaceId, point: glam::DVec3) -> Rgb {
+        if face >= self.scene.face_count() {
+            return Rgb::ZERO;
+        }
+        let i = self.locate(face, point);
+        let e = &self.engine;
+        match e.params().interpolation {
+            Interpolation::Gouraud if self.corner_values.len() > i as usize => {
+                let node = &e.nodes()[i as usize];
+                let root = &e.nodes()[e.roots()[face] as usize];
+                let (corners, n) = param_corners(node);
+                let q = param_coords(&root.polygon, point);
+                interpolate(&corners[..n], &self.corner_values[i as usize], q)
+            }
+            _ => e.radiosity()[i as usize],
+        }
+    }
+}
+
+impl Solver for HierarchicalSolver<'_> {
+    fn step(&mut self) -> Result<Step, SolveError> {
+        let before = self.accel.rays_cast();
+        let s = self.engine.step();
+        self.rays += self.accel.rays_cast().saturating_sub(before);
+        let s = s?;
+        self.update_output();
+        Ok(s)
+    }
+
+    fn solution(&self) -> &dyn Solution {
+        self
+    }
+
+    fn stats(&self) -> Stats {
+        let e = &self.engine;
+        Stats {
+            steps: e.steps(),
+            elements: e.leaf_count() as u64,
+            links: e.link_count() as u64,
+            form_factors: e.form_factors(),
+            rays: self.rays,
+            bytes: e.bytes() + (self.corner_values.len() * size_of::<[Rgb; 4]>()) as u64,
+            residual: e.residual(),
+        }
+    }
+}

@@ -1,0 +1,489 @@
+//! Cross-module behaviour of hierarchical radiosity against answers nobody here chose: the furnace
+//! (B = E/(1 − ρ) in any closed uniform scene), Howell's plate form factors, energy balance, the matrix method on
+//! the same scene, and invariances (scale, thread count, schedule).
+
+use glam::{DVec3, dvec3};
+use radlab_hierarchical::{
+    Gather, HierarchicalParams, HierarchicalSolver, Interpolation, Oracle, Schedule,
+};
+use radlab_scene::{
+    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, Solver, Step,
+    evaluation_points,
+};
+
+fn solve<'a>(scene: &'a Scene, accel: &'a Accel, p: HierarchicalParams) -> HierarchicalSolver<'a> {
+    let mut s = HierarchicalSolver::new(scene, accel, p, 7).expect("valid parameters");
+    while s.step().expect("step") == Step::Continue {}
+    s
+}
+
+/// A unit box (inward faces, one quad each) with a 0.25 × 0.25 light just below the ceiling and a floating
+/// cube of side 0.25 casting a shadow: occlusion and interreflection in 13 faces.
+fn shadow_box() -> Scene {
+    let mut b = SceneBuilder::new("shadow-box");
+    let white = b
+        .add_material(Material::new("white", Rgb::splat(0.7), Rgb::ZERO).expect("m"))
+        .expect("m");
+    let red = b
+        .add_material(Material::new("red", Rgb::new(0.6, 0.1, 0.1), Rgb::ZERO).expect("m"))
+        .expect("m");
+    let light = b
+        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(20.0)).expect("m"))
+        .expect("m");
+    let quad = |b: &mut SceneBuilder, o: DVec3, u: DVec3, v: DVec3, m: u32| {
+        b.add_polygon_points(&[o, o + u, o + u + v, o + v], m, "box")
+            .expect("quad");
+    };
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    // Room: normals u × v point inward.
+    quad(&mut b, DVec3::ZERO, x, y, white); // floor z = 0, +z
+    quad(&mut b, z, y, x, white); // ceiling, -z
+    quad(&mut b, DVec3::ZERO, y, z, red); // x = 0, +x
+    quad(&mut b, x, z, y, white); // x = 1, -x
+    quad(&mut b, DVec3::ZERO, z, x, white); // y = 0, +y
+    quad(&mut b, y, x, z, white); // y = 1, -y
+    // Light facing down, just below the ceiling.
+    let l = dvec3(0.375, 0.375, 0.999);
+    quad(&mut b, l, 0.25 * y, 0.25 * x, light);
+    // Floating cube [0.4, 0.65]² × [0.3, 0.55], outward normals.
+    let (o, s) = (dvec3(0.4, 0.4, 0.3), 0.25);
+    let (sx, sy, sz) = (s * x, s * y, s * z);
+    quad(&mut b, o, sy, sx, white); // bottom, -z
+    quad(&mut b, o + sz, sx, sy, white); // top, +z
+    quad(&mut b, o, sz, sy, white); // x-, -x
+    quad(&mut b, o + sx, sy, sz, white); // x+, +x
+    quad(&mut b, o, sx, sz, white); // y-, -y
+    quad(&mut b, o + sy, sz, sx, white); // y+, +y
+    b.build().expect("scene")
+}
+
+/// Area-weighted relative L1 difference of two solutions at shared evaluation points.
+fn difference(scene: &Scene, a: &dyn Solution, b: &dyn Solution) -> f64 {
+    let pts = evaluation_points(scene, 2000, 11);
+    let (mut num, mut den) = (0.0, 0.0);
+    for p in &pts {
+        let (x, y) = (
+            a.radiosity_at(p.face, p.point),
+            b.radiosity_at(p.face, p.point),
+        );
+        num += (x - y).abs().element_sum();
+        den += y.abs().element_sum();
+    }
+    num / den
+}
+
+#[test]
+fn furnace_cube_and_sphere_give_e_over_one_minus_rho() {
+    for spec in [
+        "furnace-cube?tessellation=2",
+        "furnace-sphere?tessellation=2",
+    ] {
+        for rho in [0.0, 0.5, 0.9, 0.999] {
+            let scene = radlab_scene::builtin(&format!("{spec}&reflectance={rho}&emission=2"))
+                .expect("builtin");
+            let accel = Accel::new(&scene);
+            let exact = 2.0 / (1.0 - rho);
+            for (oracle, interpolation) in [
+                (Oracle::F, Interpolation::Constant),
+                (Oracle::Variation, Interpolation::Gouraud),
+            ] {
+                let p = HierarchicalParams {
+                    oracle,
+                    interpolation,
+                    epsilon: 0.01,
+                    min_element_size: Some(scene.diagonal() / 30.0),
+                    visibility: radlab_scene::form_factor::VisibilitySampling::Jittered2x2,
+                    ..HierarchicalParams::default()
+                };
+                let s = solve(&scene, &accel, p);
+                if oracle == Oracle::F || rho > 0.0 {
+                    assert!(
+                        s.stats().elements > scene.face_count() as u64,
+                        "{spec}: refined"
+                    );
+                }
+                for (f, _, b) in s.leaves() {
+                    let rel = (b - Rgb::splat(exact)).abs().max_element() / exact;
+                    assert!(
+                        rel < 0.01,
+                        "{spec} rho={rho} {oracle:?}: face {f} B={b} vs {exact}"
+                    );
+                }
+                for p in evaluation_points(&scene, 300, 3) {
+                    let b = s.radiosity_at(p.face, p.point);
+                    let rel = (b - Rgb::splat(exact)).abs().max_element() / exact;
+                    assert!(
+                        rel < 0.01,
+                        "{spec} rho={rho} {interpolation:?}: B={b} vs {exact}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn classic_link_gather_errs_near_rho_one_where_leaf_gather_does_not() {
+    // The per-link mean pushed down (HSA91) gives leaves near the cube's edges form-factor sums far from one;
+    // that error is magnified by 1/(1 − ρ). The leaf gather's sums are exact.
+    let scene =
+        radlab_scene::builtin("furnace-cube?tessellation=1&reflectance=0.9").expect("scene");
+    let accel = Accel::new(&scene);
+    let spread = |gather| {
+        let p = HierarchicalParams {
+            gather,
+            oracle: Oracle::F,
+            schedule: Schedule::TwoStage,
+            epsilon: 0.05,
+            min_element_size: Some(scene.diagonal() / 30.0),
+            ..HierarchicalParams::default()
+        };
+        let s = solve(&scene, &accel, p);
+        let bs: Vec<f64> = s.leaves().iter().map(|l| l.2.x).collect();
+        let (lo, hi) = bs
+            .iter()
+            .fold((f64::MAX, 0.0f64), |a, &b| (a.0.min(b), a.1.max(b)));
+        (hi - lo) / 10.0
+    };
+    assert!(spread(Gather::Leaf) < 1e-9);
+    assert!(spread(Gather::Link) > 0.05, "{}", spread(Gather::Link));
+}
+
+#[test]
+fn plates_match_howells_form_factors() {
+    // Receiver's area-mean radiosity is ρ E F: parallel coaxial unit squares F = 0.199825 (Howell C-11),
+    // perpendicular squares sharing an edge F = 0.200044 (Howell C-14).
+    for (spec, f) in [
+        ("parallel-squares?reflectance=0.5&emission=1", 0.199825),
+        ("perpendicular-squares?reflectance=0.5&emission=1", 0.200044),
+    ] {
+        let scene = radlab_scene::builtin(spec).expect("scene");
+        let accel = Accel::new(&scene);
+        for gather in [Gather::Leaf, Gather::Link] {
+            let p = HierarchicalParams {
+                gather,
+                ..HierarchicalParams::default()
+            };
+            let s = solve(&scene, &accel, p);
+            let (mut a, mut ab) = (0.0, 0.0);
+            for (face, area, b) in s.leaves() {
+                if face == 0 {
+                    a += area;
+                    ab += area * b.x;
+                }
+            }
+            let mean = ab / a;
+            let exact = 0.5 * f;
+            assert!(
+                (mean - exact).abs() < 2e-3 * exact,
+                "{spec} {gather:?}: {mean} vs {exact}"
+            );
+        }
+    }
+}
+
+#[test]
+fn error_against_matrix_falls_as_epsilon_shrinks() {
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let h = 1.0 / 8.0;
+    let mp = radlab_matrix::MatrixParams {
+        element_size: Some(h),
+        ..radlab_matrix::MatrixParams::default()
+    };
+    let mut m = radlab_matrix::MatrixSolver::new(&scene, &accel, mp, 5).expect("matrix");
+    while m.step().expect("matrix step") == Step::Continue {}
+    let mut errors = Vec::new();
+    for epsilon in [0.2, 0.05, 0.0125, 0.003] {
+        let p = HierarchicalParams {
+            epsilon,
+            oracle: Oracle::F,
+            min_element_size: Some(h),
+            ..HierarchicalParams::default()
+        };
+        let s = solve(&scene, &accel, p);
+        errors.push((epsilon, difference(&scene, &s, &m), s.stats().elements));
+    }
+    for w in errors.windows(2) {
+        assert!(w[1].1 < w[0].1, "not decreasing: {errors:?}");
+    }
+    assert!(errors[errors.len() - 1].1 < 0.03, "{errors:?}");
+}
+
+#[test]
+fn links_per_element_stay_bounded_as_elements_grow() {
+    // Survey 2.4.1: with the F oracle each element has at most about 1/ε links, however many elements there
+    // are. Fixed geometry and ε; a smaller minimum element size lets the mesh grow.
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let epsilon = 0.02;
+    let mut ratios = Vec::new();
+    for min_size in [1.0 / 8.0, 1.0 / 16.0, 1.0 / 32.0, 1.0 / 64.0] {
+        let p = HierarchicalParams {
+            epsilon,
+            oracle: Oracle::F,
+            schedule: Schedule::TwoStage,
+            min_element_size: Some(min_size),
+            ..HierarchicalParams::default()
+        };
+        let mut s = HierarchicalSolver::new(&scene, &accel, p, 1).expect("solver");
+        // Refinement only: the links do not depend on the solution with the F oracle.
+        while s.engine().residual().is_none() {
+            assert_eq!(s.step().expect("step"), Step::Continue);
+        }
+        let st = s.stats();
+        ratios.push((min_size, st.links as f64 / st.elements as f64, st.elements));
+    }
+    assert!(
+        ratios[3].2 > 8 * ratios[0].2,
+        "elements should grow: {ratios:?}"
+    );
+    for r in &ratios {
+        assert!(r.1 < 1.0 / epsilon, "{ratios:?}");
+    }
+    for w in ratios.windows(2) {
+        assert!(w[1].1 < 1.1 * w[0].1, "links per element grew: {ratios:?}");
+    }
+}
+
+#[test]
+fn emitted_power_is_absorbed_in_a_closed_unoccluded_scene() {
+    // A cube of 24 quads with varied reflectance and two emitting faces; convex, so visibility is exact.
+    let mut b = SceneBuilder::new("balance");
+    let mats: Vec<u32> = (0..5)
+        .map(|i| {
+            let e = if i == 0 {
+                Rgb::new(5.0, 3.0, 1.0)
+            } else {
+                Rgb::ZERO
+            };
+            let rho = Rgb::new(0.2 + 0.15 * i as f64, 0.8 - 0.1 * i as f64, 0.5);
+            b.add_material(Material::new(&format!("m{i}"), rho, e).expect("m"))
+                .expect("m")
+        })
+        .collect();
+    let faces = [
+        (DVec3::ZERO, DVec3::X, DVec3::Y),
+        (DVec3::Z, DVec3::Y, DVec3::X),
+        (DVec3::ZERO, DVec3::Y, DVec3::Z),
+        (DVec3::X, DVec3::Z, DVec3::Y),
+        (DVec3::ZERO, DVec3::Z, DVec3::X),
+        (DVec3::Y, DVec3::X, DVec3::Z),
+    ];
+    let mut k = 0;
+    for (o, u, v) in faces {
+        for j in 0..2 {
+            for i in 0..2 {
+                let p = o + 0.5 * (i as f64 * u + j as f64 * v);
+                let m = mats[k % 5];
+                k += 1;
+                b.add_polygon_points(&[p, p + 0.5 * u, p + 0.5 * (u + v), p + 0.5 * v], m, "q")
+                    .expect("quad");
+            }
+        }
+    }
+    let scene = b.build().expect("scene");
+    let accel = Accel::new(&scene);
+    // Rows are exact (each leaf's form factors sum to one); columns are exact only up to the source-side
+    // averaging of the hierarchy (a source node sends its children's mean radiosity with its own mean form
+    // factor), so the imbalance is small and shrinks with ε.
+    let mut imbalance = Vec::new();
+    for epsilon in [0.08, 0.02] {
+        let p = HierarchicalParams {
+            tolerance: 1e-8,
+            epsilon,
+            oracle: Oracle::F,
+            ..HierarchicalParams::default()
+        };
+        let s = solve(&scene, &accel, p);
+        let mut absorbed = Rgb::ZERO;
+        let e = s.engine();
+        for i in 0..e.nodes().len() as u32 {
+            if e.is_leaf(i) {
+                let n = &e.nodes()[i as usize];
+                // H = (B − E)/ρ; absorbed (1 − ρ) H.
+                let h = (e.radiosity()[i as usize] - n.emission) / n.reflectance;
+                absorbed += n.area * (Rgb::ONE - n.reflectance) * h;
+            }
+        }
+        let emitted = scene.emitted_power();
+        imbalance.push(((absorbed - emitted) / emitted).abs().max_element());
+    }
+    assert!(imbalance[1] < imbalance[0], "{imbalance:?}");
+    assert!(imbalance[1] < 3e-4, "{imbalance:?}");
+}
+
+#[test]
+fn schedules_reach_the_same_answer() {
+    // With the geometric oracle and α = 1 every schedule builds the same links (rays are drawn per pair of
+    // elements, whatever order they were made in), so the answers agree to the solver's tolerance. With the
+    // light-driven oracle, interleaved and scheduled refine from the solution and agree to a fraction of the
+    // method's error; two-stage sees emission only when it refines (survey 2.4.3) and is not compared.
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let run = |schedule, oracle| {
+        let p = HierarchicalParams {
+            schedule,
+            oracle,
+            alpha: if oracle == Oracle::F { 1.0 } else { 2.0 },
+            epsilon: 0.02,
+            tolerance: 1e-6,
+            ..HierarchicalParams::default()
+        };
+        solve(&scene, &accel, p)
+    };
+    let f: Vec<_> = [
+        Schedule::TwoStage,
+        Schedule::Interleaved,
+        Schedule::Scheduled,
+    ]
+    .into_iter()
+    .map(|s| run(s, Oracle::F))
+    .collect();
+    for a in &f {
+        assert_eq!(a.stats().links, f[0].stats().links);
+        for b in &f {
+            let d = difference(&scene, a, b);
+            assert!(d < 1e-5, "F oracle: schedules differ by {d}");
+        }
+    }
+    let a = run(Schedule::Interleaved, Oracle::Variation);
+    let b = run(Schedule::Scheduled, Oracle::Variation);
+    let d = difference(&scene, &a, &b);
+    assert!(
+        d < 0.01,
+        "variation oracle: interleaved and scheduled differ by {d}"
+    );
+}
+
+#[test]
+fn identical_for_any_thread_count() {
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            let s = solve(&scene, &accel, HierarchicalParams::default());
+            let mut st = s.stats();
+            st.rays = 0;
+            (s.engine().radiosity().to_vec(), st)
+        })
+    };
+    let (a, sa) = run(1);
+    let (b, sb) = run(2);
+    assert_eq!(sa, sb);
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_array() == y.to_array()));
+}
+
+#[test]
+fn scaled_scenes_give_the_same_answer() {
+    let base = radlab_scene::builtin("perpendicular-squares").expect("scene");
+    let accel = Accel::new(&base);
+    let reference = solve(&base, &accel, HierarchicalParams::default());
+    for scale in [1e-4, 1e4] {
+        let spec = format!("perpendicular-squares?width={scale}&height={scale}&length={scale}");
+        let scene = radlab_scene::builtin(&spec).expect("scene");
+        let accel = Accel::new(&scene);
+        let s = solve(&scene, &accel, HierarchicalParams::default());
+        assert_eq!(s.stats().elements, reference.stats().elements, "{scale}");
+        for (x, y) in s.leaves().iter().zip(reference.leaves()) {
+            assert!(
+                (x.2 - y.2).abs().max_element() < 1e-9,
+                "{scale}: {} vs {}",
+                x.2,
+                y.2
+            );
+        }
+    }
+}
+
+#[test]
+fn radiosity_at_finds_each_leaf_and_gouraud_is_continuous() {
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let constant = solve(&scene, &accel, HierarchicalParams::coarse());
+    let e = constant.engine();
+    for i in 0..e.nodes().len() as u32 {
+        if e.is_leaf(i) {
+            let n = &e.nodes()[i as usize];
+            assert_eq!(
+                constant.radiosity_at(n.face, n.centroid),
+                e.radiosity()[i as usize]
+            );
+        }
+    }
+    let gouraud = solve(
+        &scene,
+        &accel,
+        HierarchicalParams {
+            interpolation: Interpolation::Gouraud,
+            ..HierarchicalParams::coarse()
+        },
+    );
+    // Walk a line across the floor in small steps: Gouraud output never jumps, constant output does.
+    let jump = |s: &HierarchicalSolver| {
+        let mut worst: f64 = 0.0;
+        let n = 4000;
+        let mut prev = s.radiosity_at(0, dvec3(0.001, 0.37, 0.0));
+        for k in 1..=n {
+            let x = 0.001 + 0.998 * k as f64 / n as f64;
+            let b = s.radiosity_at(0, dvec3(x, 0.37, 0.0));
+            worst = worst.max((b - prev).abs().max_element());
+            prev = b;
+        }
+        worst
+    };
+    let (jg, jc) = (jump(&gouraud), jump(&constant));
+    assert!(jg < 0.2 * jc, "gouraud {jg} constant {jc}");
+}
+
+#[test]
+fn bad_parameters_are_errors_that_name_them() {
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let cases = [
+        (
+            "epsilon",
+            HierarchicalParams {
+                epsilon: -1.0,
+                ..HierarchicalParams::default()
+            },
+        ),
+        (
+            "min_element_size",
+            HierarchicalParams {
+                min_element_size: Some(f64::NAN),
+                ..HierarchicalParams::default()
+            },
+        ),
+        (
+            "quadrature",
+            HierarchicalParams {
+                quadrature: 1,
+                oracle: Oracle::Variation,
+                ..HierarchicalParams::default()
+            },
+        ),
+    ];
+    for (name, p) in cases {
+        let e = HierarchicalSolver::new(&scene, &accel, p, 0)
+            .expect_err("rejected")
+            .to_string();
+        assert!(e.contains(name), "{e}");
+    }
+    let tiny = HierarchicalParams {
+        memory_budget_mib: 1e-3,
+        ..HierarchicalParams::default()
+    };
+    let mut s = HierarchicalSolver::new(&scene, &accel, tiny, 0).expect("valid");
+    let mut result = Ok(Step::Continue);
+    while let Ok(Step::Continue) = result {
+        result = s.step();
+    }
+    let e = result.expect_err("over budget").to_string();
+    assert!(e.contains("memory_budget_mib"), "{e}");
+    assert!(HierarchicalParams::from_pairs(&[("gather".into(), "leaf".into())]).is_ok());
+}

@@ -1,0 +1,121 @@
+//! Camera path tracing: the radiance L = B/π seen through each pixel of a pinhole camera (a diffuse surface's
+//! radiance is its radiosity over π), estimated with `samples_per_pixel` primary rays jittered uniformly over
+//! the pixel, each continued by the path estimator of path_estimator.rs (NEE + MIS + Russian roulette; Kajiya
+//! 1986, Veach 1997). Returns the mean radiance and the standard error of that mean per pixel and channel.
+//!
+//! A primary ray that escapes or reaches the back of a face sees 0 (faces are one-sided). Pixel (x, y) draws
+//! from random stream y·width + x, so images are bit-identical for any number of threads.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use radlab_scene::{Accel, Camera, Image, MethodParams, Rgb, Scene, SolveError, sampling};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::path_estimator::{DirectSampling, PathEstimator};
+use crate::point_estimator::DEFAULT_MAX_DEPTH;
+use crate::running_stats::RunningStats;
+
+/// Parameters of camera path tracing.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RenderParams {
+    /// Paths per pixel (default 64). 1 gives a preview with an infinite standard error.
+    pub samples_per_pixel: u32,
+    /// Largest number of path segments after the first hit (default 100,000; see `PointParams::max_depth`).
+    pub max_depth: u32,
+    /// How direct light is sampled at each path vertex (default `mis`).
+    pub direct: DirectSampling,
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        Self {
+            samples_per_pixel: 64,
+            max_depth: DEFAULT_MAX_DEPTH,
+            direct: DirectSampling::Mis,
+        }
+    }
+}
+
+impl MethodParams for RenderParams {
+    fn docs() -> Vec<(&'static str, &'static str)> {
+        vec![
+            (
+                "samples_per_pixel",
+                "paths per pixel for render (default 64); standard error falls as 1/sqrt(samples_per_pixel)",
+            ),
+            (
+                "max_depth",
+                "cap on path segments after the first hit (default 100000)",
+            ),
+            (
+                "direct",
+                "direct-light sampling: mis (default), next-event, hemisphere",
+            ),
+        ]
+    }
+
+    fn validate(&self) -> Result<(), SolveError> {
+        if self.samples_per_pixel == 0 {
+            return Err(SolveError::param("samples_per_pixel", "must be at least 1"));
+        }
+        if self.max_depth == 0 {
+            return Err(SolveError::param("max_depth", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Path-traces `camera`'s pixels: (mean radiance, standard error of the mean), both in W/m²/sr, linear RGB.
+/// `progress(pixels_done, pixels_total)` is called from worker threads after each row.
+pub fn render(
+    scene: &Scene,
+    accel: &Accel,
+    camera: &Camera,
+    params: &RenderParams,
+    seed: u64,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> (Image, Image) {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let estimator = PathEstimator::new(scene, accel, params.max_depth, params.direct);
+    let done = AtomicUsize::new(0);
+    let total = w * h;
+    let rows: Vec<Vec<(Rgb, Rgb)>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let row = (0..w)
+                .map(|x| {
+                    let mut rng = sampling::rng(seed, (y * w + x) as u64);
+                    let mut stats = RunningStats::default();
+                    for _ in 0..params.samples_per_pixel {
+                        let (jx, jy) = (sampling::uniform(&mut rng), sampling::uniform(&mut rng));
+                        let ray = camera.ray(x as f64 + jx, y as f64 + jy);
+                        let radiance = match accel.intersect(&ray) {
+                            Some(hit) if scene.faces[hit.face].normal.dot(ray.dir) < 0.0 => {
+                                estimator.radiosity(
+                                    hit.face,
+                                    hit.point,
+                                    scene.faces[hit.face].normal,
+                                    &mut rng,
+                                ) * std::f64::consts::FRAC_1_PI
+                            }
+                            _ => Rgb::ZERO,
+                        };
+                        stats.push(radiance);
+                    }
+                    (stats.mean(), stats.std_error())
+                })
+                .collect();
+            progress(done.fetch_add(w, Ordering::AcqRel) + w, total);
+            row
+        })
+        .collect();
+    let (mean, se): (Vec<Rgb>, Vec<Rgb>) = rows.into_iter().flatten().unzip();
+    let image = |pixels| Image {
+        width: camera.width,
+        height: camera.height,
+        pixels,
+    };
+    (image(mean), image(se))
+}

@@ -1,0 +1,387 @@
+//! Mesh-based Monte Carlo radiosity (survey 2.2.4): a view-independent solution over a fixed element mesh,
+//! estimated by particles shot from the emitters and deposited on the elements they hit, as a [`Solver`].
+//!
+//! The unknowns are those of the discretised radiosity system (ALGORITHMS.md), written for powers
+//! P_j = A_j B_j: P_j = A_j E_j + ρ_j Σ_i F_ij P_i. A particle leaving a uniformly chosen point of element i
+//! in a cosine-distributed direction lands on element j with probability exactly F_ij (visibility included),
+//! so tallying the power Φ_j arriving at each element estimates the incident powers without computing a
+//! single form factor (Shirley 1991; Neumann et al. 1995; Bekaert 1999, ch. 4–5), and
+//!
+//! B_j = E_j + ρ_j Φ_j / A_j.
+//!
+//! Two estimators ([`McMethod`]), both unbiased for the given mesh (they converge to what matrix radiosity
+//! solves, up to its form-factor quadrature error) and both with error ∝ 1/√particles:
+//! - `random-walk` (random_walk.rs): discrete collision-shooting random walks;
+//! - `stochastic-jacobi` (stochastic_jacobi.rs): Bekaert's stochastic Jacobi iteration.
+//!
+//! Each [`Solver::step`] runs `particles_per_step` fresh particles (an independent estimate); the solution
+//! after k steps is the mean over the k steps, i.e. over every particle so far, and the spread of the step
+//! estimates gives each element's standard error. Particles draw from streams derived from (seed, step,
+//! particle index) and deposits are summed in a fixed order, so results are bit-identical for any number of
+//! threads.
+
+use glam::DVec3;
+use radlab_scene::{
+    Accel, ElementMesh, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats,
+    Step, default_element_size,
+    sampling::{self, Rng},
+};
+use serde::{Deserialize, Serialize};
+
+use crate::discrete_distribution::Discrete;
+use crate::element_locate::ElementLocator;
+use crate::emitter_sampling::channel_mean;
+use crate::point_estimator::DEFAULT_MAX_DEPTH;
+use crate::{random_walk, stochastic_jacobi};
+
+/// Which Monte Carlo estimator of the element radiosities to run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum McMethod {
+    /// Discrete shooting random walks with the collision estimator (Shirley 1991; Sbert 1993; Bekaert 1999
+    /// §4.3): each particle starts on an emitting element chosen by power, every landing is tallied, and it
+    /// survives with probability ρ (Russian roulette), re-emitted from a uniform point of the element it hit.
+    /// The default.
+    #[default]
+    RandomWalk,
+    /// Stochastic Jacobi iteration (Neumann et al. 1995; Bekaert 1999 §5.2): generation k shoots the power
+    /// received in generation k − 1, with particles of equal power chosen over elements by unshot power and
+    /// their number rounded stochastically, until no power is left. Same cost; spreads samples by power
+    /// rather than by path, which suits scenes with many weak secondary sources.
+    StochasticJacobi,
+}
+
+/// Parameters of mesh-based Monte Carlo radiosity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct McRadiosityParams {
+    /// Element edge length in scene units (default: 1/20 of the scene's bounding diagonal, as for matrix).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub element_size: Option<f64>,
+    /// Particles shot from the emitters per step (default 100,000).
+    pub particles_per_step: u64,
+    /// Steps before the solver reports convergence (default 100).
+    pub max_steps: u64,
+    /// The estimator (default `random-walk`).
+    pub method: McMethod,
+    /// Cap on bounces per particle (random walk) or generations per step (stochastic Jacobi); default 100,000.
+    /// Russian roulette ends walks without bias; the cap only guards against runaway walks.
+    pub max_depth: u32,
+}
+
+impl Default for McRadiosityParams {
+    fn default() -> Self {
+        Self {
+            element_size: None,
+            particles_per_step: 100_000,
+            max_steps: 100,
+            method: McMethod::RandomWalk,
+            max_depth: DEFAULT_MAX_DEPTH,
+        }
+    }
+}
+
+impl MethodParams for McRadiosityParams {
+    fn docs() -> Vec<(&'static str, &'static str)> {
+        vec![
+            (
+                "element_size",
+                "element edge length (default 1/20 of the scene's diagonal, as for matrix)",
+            ),
+            (
+                "particles_per_step",
+                "particles shot from the emitters per step (default 100000)",
+            ),
+            (
+                "max_steps",
+                "steps before convergence is reported (default 100); the result is the mean over all steps",
+            ),
+            (
+                "method",
+                "random-walk (collision-shooting random walks; default) or stochastic-jacobi",
+            ),
+            (
+                "max_depth",
+                "cap on bounces per particle or generations per step (default 100000)",
+            ),
+        ]
+    }
+
+    fn validate(&self) -> Result<(), SolveError> {
+        if let Some(s) = self.element_size
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(SolveError::param(
+                "element_size",
+                format!("{s} must be a finite length > 0 (scene units)"),
+            ));
+        }
+        if self.particles_per_step == 0 {
+            return Err(SolveError::param(
+                "particles_per_step",
+                "must be at least 1",
+            ));
+        }
+        if self.max_steps == 0 {
+            return Err(SolveError::param("max_steps", "must be at least 1"));
+        }
+        if self.max_depth == 0 {
+            return Err(SolveError::param("max_depth", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// What the particle estimators share: the mesh, where particles start, and how they fly.
+pub(crate) struct Transport<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    pub mesh: &'a ElementMesh,
+    pub locator: &'a ElementLocator,
+    /// Emitting elements, chosen with probability A_e Ē_e / Σ.
+    pub sources: &'a Discrete,
+    pub source_elements: &'a [usize],
+    pub max_depth: u32,
+}
+
+impl Transport<'_> {
+    /// Σ_e A_e Ē_e: the scalar emitted power.
+    pub(crate) fn emitted_power(&self) -> f64 {
+        self.sources.total()
+    }
+
+    /// Reflectance of element `e`.
+    pub(crate) fn reflectance(&self, e: usize) -> Rgb {
+        self.scene.reflectance(self.mesh.elements[e].face as FaceId)
+    }
+
+    /// Emission of element `e`.
+    pub(crate) fn emission(&self, e: usize) -> Rgb {
+        self.scene.emission(self.mesh.elements[e].face as FaceId)
+    }
+
+    /// Flies a particle from a uniform point of element `from` in a cosine-distributed direction about its
+    /// normal (landing on element j with probability F_ij); returns the element whose front it lands on.
+    pub(crate) fn shoot(&self, from: usize, rng: &mut Rng) -> Option<usize> {
+        let el = &self.mesh.elements[from];
+        let f = el.face as FaceId;
+        let x = el
+            .polygon
+            .sample_uniform(sampling::uniform(rng), sampling::uniform(rng));
+        let dir = sampling::cosine_hemisphere(
+            self.scene.faces[f].normal,
+            sampling::uniform(rng),
+            sampling::uniform(rng),
+        );
+        let hit = self.accel.intersect_from(f, x, dir)?;
+        if self.scene.faces[hit.face].normal.dot(dir) >= 0.0 {
+            return None; // the back of a face absorbs
+        }
+        Some(
+            self.locator
+                .locate(self.scene, self.mesh, hit.face, hit.point),
+        )
+    }
+}
+
+/// A seed for one (step, generation) of a computation seeded with `seed`.
+pub(crate) fn derive_seed(seed: u64, a: u64, b: u64) -> u64 {
+    sampling::mix64(seed ^ sampling::mix64(a ^ sampling::mix64(b ^ 0xA076_1D64_78BD_642F)))
+}
+
+/// Piecewise-constant radiosity over the element mesh.
+struct MeshSolution<'a> {
+    scene: &'a Scene,
+    mesh: ElementMesh,
+    locator: ElementLocator,
+    radiosity: Vec<Rgb>,
+}
+
+impl Solution for MeshSolution<'_> {
+    fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
+        self.radiosity[self.locator.locate(self.scene, &self.mesh, face, point)]
+    }
+}
+
+/// Mesh-based Monte Carlo radiosity as a [`Solver`]: one batch of particles per step.
+pub struct McRadiositySolver<'a> {
+    accel: &'a Accel,
+    params: McRadiosityParams,
+    seed: u64,
+    solution: MeshSolution<'a>,
+    /// Σ over steps of squared deviations of the step estimates (Welford).
+    m2: Vec<Rgb>,
+    sources: Discrete,
+    source_elements: Vec<usize>,
+    steps: u64,
+    rays: u64,
+}
+
+impl<'a> McRadiositySolver<'a> {
+    /// Meshes the scene and prepares the sources. Fails on invalid parameters.
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: McRadiosityParams,
+        seed: u64,
+    ) -> Result<Self, SolveError> {
+        params.validate()?;
+        let size = params
+            .element_size
+            .unwrap_or_else(|| default_element_size(scene));
+        if !(size.is_finite() && size > 0.0) {
+            return Err(SolveError::param(
+                "element_size",
+                format!(
+                    "the default element size of this scene is {size}; set element_size explicitly"
+                ),
+            ));
+        }
+        let mesh = ElementMesh::new(scene, size);
+        let locator = ElementLocator::new(scene, &mesh);
+        let source_elements: Vec<usize> = (0..mesh.len())
+            .filter(|&e| scene.material(mesh.elements[e].face as FaceId).is_emitter())
+            .collect();
+        let sources = Discrete::new(source_elements.iter().map(|&e| {
+            mesh.elements[e].area * channel_mean(scene.emission(mesh.elements[e].face as FaceId))
+        }));
+        let radiosity = mesh
+            .elements
+            .iter()
+            .map(|el| scene.emission(el.face as FaceId))
+            .collect();
+        let n = mesh.len();
+        Ok(Self {
+            accel,
+            params,
+            seed,
+            solution: MeshSolution {
+                scene,
+                mesh,
+                locator,
+                radiosity,
+            },
+            m2: vec![Rgb::ZERO; n],
+            sources,
+            source_elements,
+            steps: 0,
+            rays: 0,
+        })
+    }
+
+    /// The element mesh solved over.
+    pub fn mesh(&self) -> &ElementMesh {
+        &self.solution.mesh
+    }
+
+    /// Radiosity per element (the mean over all steps so far; E before the first step).
+    pub fn element_radiosity(&self) -> &[Rgb] {
+        &self.solution.radiosity
+    }
+
+    /// Standard error of each element's radiosity, from the spread of the step estimates (`None` before
+    /// two steps).
+    pub fn element_std_error(&self) -> Option<Vec<Rgb>> {
+        if self.steps < 2 {
+            return None;
+        }
+        let k = self.steps as f64;
+        Some(
+            self.m2
+                .iter()
+                .map(|m2| (m2.max(Rgb::ZERO) / ((k - 1.0) * k)).sqrt())
+                .collect(),
+        )
+    }
+
+    /// Particles shot so far from the emitters.
+    pub fn particles(&self) -> u64 {
+        self.steps * self.params.particles_per_step
+    }
+
+    /// Relative standard error of the whole solution: √(Σ A_j se_j²) / √(Σ A_j B_j²), channel means.
+    fn relative_std_error(&self) -> Option<f64> {
+        let se = self.element_std_error()?;
+        let mesh = &self.solution.mesh;
+        let (mut num, mut den) = (0.0, 0.0);
+        for (e, (s, b)) in se.iter().zip(&self.solution.radiosity).enumerate() {
+            let a = mesh.elements[e].area;
+            num += a * channel_mean(*s * *s);
+            den += a * channel_mean(*b * *b);
+        }
+        (den > 0.0).then(|| (num / den).sqrt())
+    }
+}
+
+impl Solver for McRadiositySolver<'_> {
+    fn step(&mut self) -> Result<Step, SolveError> {
+        if self.steps >= self.params.max_steps {
+            return Ok(Step::Converged);
+        }
+        let transport = Transport {
+            scene: self.solution.scene,
+            accel: self.accel,
+            mesh: &self.solution.mesh,
+            locator: &self.solution.locator,
+            sources: &self.sources,
+            source_elements: &self.source_elements,
+            max_depth: self.params.max_depth,
+        };
+        let n = self.params.particles_per_step;
+        let (incident, rays) = if self.sources.is_empty() {
+            (vec![Rgb::ZERO; self.solution.mesh.len()], 0)
+        } else {
+            match self.params.method {
+                McMethod::RandomWalk => {
+                    random_walk::shoot_walks(&transport, n, self.steps * n, self.seed)
+                }
+                McMethod::StochasticJacobi => {
+                    stochastic_jacobi::run(&transport, n, derive_seed(self.seed, self.steps, 0))
+                }
+            }
+        };
+        self.rays += rays;
+        self.steps += 1;
+        let k = self.steps as f64;
+        let mesh = &self.solution.mesh;
+        for (e, phi) in incident.iter().enumerate() {
+            let b = transport.emission(e) + transport.reflectance(e) * *phi / mesh.elements[e].area;
+            if !b.is_finite() {
+                return Err(SolveError::Numerical(format!(
+                    "element {e} (face {}) got a non-finite radiosity estimate",
+                    mesh.elements[e].face
+                )));
+            }
+            let mean = &mut self.solution.radiosity[e];
+            let delta = b - *mean;
+            *mean += delta / k;
+            self.m2[e] += delta * (b - *mean);
+        }
+        Ok(if self.steps >= self.params.max_steps {
+            Step::Converged
+        } else {
+            Step::Continue
+        })
+    }
+
+    fn solution(&self) -> &dyn Solution {
+        &self.solution
+    }
+
+    fn stats(&self) -> Stats {
+        let n = self.solution.mesh.len();
+        Stats {
+            steps: self.steps,
+            elements: n as u64,
+            links: 0,
+            form_factors: 0,
+            rays: self.rays,
+            bytes: (self.solution.mesh.bytes()
+                + self.solution.locator.bytes()
+                + 2 * n * size_of::<Rgb>()
+                + self.source_elements.len() * (size_of::<usize>() + size_of::<f64>()))
+                as u64,
+            residual: self.relative_std_error(),
+        }
+    }
+}
