@@ -309,18 +309,18 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         out.flush()?;
         Ok(())
     })?;
-    if job.outputs.images {
-        if let Some(camera) = super::images::camera_for(&scene, &job.outputs) {
-            let image = radlab_scene::render_solution(
-                &scene,
-                &accel,
-                &camera,
-                solver.solution(),
-                job.outputs.image_spp,
-                spec.seed,
-            );
-            write_exr(&image_path(&job.dir, &result.id), &image)?;
-        }
+    if job.outputs.images
+        && let Some(camera) = super::images::camera_for(&scene, &job.outputs)
+    {
+        let image = radlab_scene::render_solution(
+            &scene,
+            &accel,
+            &camera,
+            solver.solution(),
+            job.outputs.image_spp,
+            spec.seed,
+        );
+        write_exr(&image_path(&job.dir, &result.id), &image)?;
     }
     Ok(())
 }
@@ -438,10 +438,10 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
     };
     let err_text = reader.join().unwrap_or_default();
     let _ = std::fs::remove_file(&job_file);
-    if let (Some(st), Ok(r)) = (status, read_result(&result_file)) {
-        if st.success() || r.outcome == "out-of-memory" {
-            return Ok(r);
-        }
+    if let (Some(st), Ok(r)) = (status, read_result(&result_file))
+        && (st.success() || r.outcome == "out-of-memory")
+    {
+        return Ok(r);
     }
     let mut r = base_result(job);
     // The panic message if there is one (the line after "panicked at"), otherwise the last lines of stderr.

@@ -152,49 +152,49 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
                 r.kind, r.seconds, floor.l1
             );
         }
-        if cfg.outputs.images {
-            if let Some(camera) = images::camera_for(&scene, &cfg.outputs) {
-                let target = out.join("images").join(format!("reference-{label}.exr"));
-                let cached = refs_dir.join(format!(
-                    "{}-image-{}.exr",
-                    label,
-                    &digest::hex(
-                        format!(
-                            "{}|{:?}|{}|{}",
-                            digest::scene(&scene),
-                            camera,
-                            cfg.reference.image_spp,
-                            cfg.reference.seed
-                        )
-                        .as_bytes()
-                    )[..16]
-                ));
-                if !cached.exists() {
-                    let params = radlab_pathtrace::RenderParams {
-                        samples_per_pixel: cfg.reference.image_spp,
-                        ..Default::default()
-                    };
-                    let bar = progress::bar(
-                        (camera.width * camera.height) as u64,
-                        &format!("reference image {label}"),
-                    );
-                    let (img, _) = radlab_pathtrace::render(
-                        &scene,
-                        &accel,
-                        &camera,
-                        &params,
-                        cfg.reference.seed,
-                        &|d, _| bar.set_position(d as u64),
-                    );
-                    bar.finish_and_clear();
-                    write_exr(&cached, &img)?;
-                }
-                crate::output::atomic::write_via_temp(&target, |tmp| {
-                    std::fs::copy(&cached, tmp)
-                        .map(|_| ())
-                        .with_context(|| format!("cannot copy {}", cached.display()))
-                })?;
+        if cfg.outputs.images
+            && let Some(camera) = images::camera_for(&scene, &cfg.outputs)
+        {
+            let target = out.join("images").join(format!("reference-{label}.exr"));
+            let cached = refs_dir.join(format!(
+                "{}-image-{}.exr",
+                label,
+                &digest::hex(
+                    format!(
+                        "{}|{:?}|{}|{}",
+                        digest::scene(&scene),
+                        camera,
+                        cfg.reference.image_spp,
+                        cfg.reference.seed
+                    )
+                    .as_bytes()
+                )[..16]
+            ));
+            if !cached.exists() {
+                let params = radlab_pathtrace::RenderParams {
+                    samples_per_pixel: cfg.reference.image_spp,
+                    ..Default::default()
+                };
+                let bar = progress::bar(
+                    (camera.width * camera.height) as u64,
+                    &format!("reference image {label}"),
+                );
+                let (img, _) = radlab_pathtrace::render(
+                    &scene,
+                    &accel,
+                    &camera,
+                    &params,
+                    cfg.reference.seed,
+                    &|d, _| bar.set_position(d as u64),
+                );
+                bar.finish_and_clear();
+                write_exr(&cached, &img)?;
             }
+            crate::output::atomic::write_via_temp(&target, |tmp| {
+                std::fs::copy(&cached, tmp)
+                    .map(|_| ())
+                    .with_context(|| format!("cannot copy {}", cached.display()))
+            })?;
         }
         for spec in mine {
             jobs.push(Job {
@@ -401,15 +401,15 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<()> {
         })?;
         let c: ExperimentConfig =
             toml::from_str(&text).with_context(|| format!("{}/config.toml", d.display()))?;
-        if let Some(prev) = &cfg {
-            if prev.name != c.name {
-                bail!(
-                    "{}: experiment '{}' differs from '{}'",
-                    d.display(),
-                    c.name,
-                    prev.name
-                );
-            }
+        if let Some(prev) = &cfg
+            && prev.name != c.name
+        {
+            bail!(
+                "{}: experiment '{}' differs from '{}'",
+                d.display(),
+                c.name,
+                prev.name
+            );
         }
         for sub in ["runs", "images"] {
             let src = d.join(sub);
@@ -419,11 +419,11 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<()> {
             std::fs::create_dir_all(out.join(sub))?;
             for e in std::fs::read_dir(&src)? {
                 let p = e?.path();
-                if let Some(n) = p.file_name() {
-                    if !n.to_string_lossy().starts_with('.') {
-                        std::fs::copy(&p, out.join(sub).join(n))
-                            .with_context(|| format!("cannot copy {}", p.display()))?;
-                    }
+                if let Some(n) = p.file_name()
+                    && !n.to_string_lossy().starts_with('.')
+                {
+                    std::fs::copy(&p, out.join(sub).join(n))
+                        .with_context(|| format!("cannot copy {}", p.display()))?;
                 }
             }
         }

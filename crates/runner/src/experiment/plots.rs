@@ -129,28 +129,28 @@ where
             .draw_series(points.iter().map(|&p| Circle::new(p, 3, c.filled())))
             .map_err(e)?;
     }
-    if let Some((y, label)) = &plot.hline {
-        if *y > 0.0 {
-            let dashes: Vec<(f64, f64)> = (0..60)
-                .filter(|i| i % 2 == 0)
-                .flat_map(|i| {
-                    let t = |k: f64| (xr.0.ln() + k / 60.0 * (xr.1.ln() - xr.0.ln())).exp();
-                    [(t(i as f64), *y), (t(i as f64 + 1.0), *y)]
-                })
-                .collect();
-            for seg in dashes.chunks(2) {
-                chart
-                    .draw_series(LineSeries::new(seg.to_vec(), BLACK.stroke_width(1)))
-                    .map_err(e)?;
-            }
+    if let Some((y, label)) = &plot.hline
+        && *y > 0.0
+    {
+        let dashes: Vec<(f64, f64)> = (0..60)
+            .filter(|i| i % 2 == 0)
+            .flat_map(|i| {
+                let t = |k: f64| (xr.0.ln() + k / 60.0 * (xr.1.ln() - xr.0.ln())).exp();
+                [(t(i as f64), *y), (t(i as f64 + 1.0), *y)]
+            })
+            .collect();
+        for seg in dashes.chunks(2) {
             chart
-                .draw_series(std::iter::once(Text::new(
-                    label.clone(),
-                    (xr.0 * 1.1, *y * 1.15),
-                    ("sans-serif", 12),
-                )))
+                .draw_series(LineSeries::new(seg.to_vec(), BLACK.stroke_width(1)))
                 .map_err(e)?;
         }
+        chart
+            .draw_series(std::iter::once(Text::new(
+                label.clone(),
+                (xr.0 * 1.1, *y * 1.15),
+                ("sans-serif", 12),
+            )))
+            .map_err(e)?;
     }
     chart
         .configure_series_labels()

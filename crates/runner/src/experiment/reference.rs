@@ -4,6 +4,7 @@
 //! - `direct`: B(x) = E(x) + ρ(x) Σ_e E_e F_{dx→e} V(x, e), the exact point-to-polygon factor times a
 //!   visibility fraction from 8 × 8 stratified rays (exact for scenes where light bounces once, e.g. the plates);
 //! - `pathtrace`: radlab-pathtrace's per-point estimator, whose standard error is the noise floor.
+//!
 //! `auto` picks `furnace` for a closed one-material scene (every edge shared by exactly two faces, matched by
 //! position) and `pathtrace` otherwise.
 
@@ -31,6 +32,9 @@ pub struct Reference {
     pub seconds: f64,
 }
 
+/// A vertex position quantised to a grid, for matching shared edges.
+type GridPoint = (i64, i64, i64);
+
 /// Whether the scene is a closed surface with a single material: the furnace applies.
 pub fn is_furnace(scene: &Scene) -> bool {
     let m0 = scene.faces[0].material;
@@ -45,7 +49,7 @@ pub fn is_furnace(scene: &Scene) -> bool {
             (p.z / q).round() as i64,
         )
     };
-    let mut edges: HashMap<((i64, i64, i64), (i64, i64, i64)), u32> = HashMap::new();
+    let mut edges: HashMap<(GridPoint, GridPoint), u32> = HashMap::new();
     for f in 0..scene.faces.len() {
         let poly = scene.polygon(f);
         let v = poly.vertices();

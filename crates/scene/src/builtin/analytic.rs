@@ -196,21 +196,18 @@ mod tests {
 
     #[test]
     fn bad_specs_are_named() {
-        let e = builtin("nope").err().expect("unknown").to_string();
+        let e = builtin("nope").expect_err("unknown").to_string();
         assert!(e.contains("furnace-cube"), "{e}");
         let e = builtin("furnace-cube?reflectance=1")
-            .err()
-            .expect("rho=1")
+            .expect_err("rho=1")
             .to_string();
         assert!(e.contains("reflectance"), "{e}");
         let e = builtin("furnace-cube?colour=1")
-            .err()
-            .expect("unknown key")
+            .expect_err("unknown key")
             .to_string();
         assert!(e.contains("colour") && e.contains("tessellation"), "{e}");
         let e = builtin("furnace-cube?size=nan")
-            .err()
-            .expect("nan")
+            .expect_err("nan")
             .to_string();
         assert!(e.contains("size"), "{e}");
     }

@@ -141,7 +141,7 @@ fn load_mtl_checked(path: &Path) -> Result<tobj::MTLLoadResult, SceneError> {
             .find(|(name, _)| *name == m.name)
             .map(|(_, l)| l);
         if let Some(kd) = m.diffuse {
-            let rho = DVec3::new(kd[0].into(), kd[1].into(), kd[2].into());
+            let rho = DVec3::new(kd[0], kd[1], kd[2]);
             if !rho.to_array().iter().all(|c| (0.0..1.0).contains(c)) {
                 return Err(parse_error(
                     path,
@@ -155,7 +155,7 @@ fn load_mtl_checked(path: &Path) -> Result<tobj::MTLLoadResult, SceneError> {
             }
         }
         if let Some(ke) = m.emissive {
-            let e = DVec3::new(ke[0].into(), ke[1].into(), ke[2].into());
+            let e = DVec3::new(ke[0], ke[1], ke[2]);
             if !e.to_array().iter().all(|c| c.is_finite() && *c >= 0.0) {
                 return Err(parse_error(
                     path,
@@ -225,15 +225,15 @@ pub fn read_obj(path: &Path) -> Result<PolygonMesh, SceneError> {
     let mut mesh = PolygonMesh::new();
     for m in &materials {
         let rho = match m.diffuse {
-            Some(kd) => DVec3::new(kd[0].into(), kd[1].into(), kd[2].into()),
+            Some(kd) => DVec3::new(kd[0], kd[1], kd[2]),
             None => {
                 mesh.notes.materials_without_kd += 1;
                 DVec3::splat(super::DEFAULT_REFLECTANCE)
             }
         };
-        let e = m.emissive.map_or(DVec3::ZERO, |ke| {
-            DVec3::new(ke[0].into(), ke[1].into(), ke[2].into())
-        });
+        let e = m
+            .emissive
+            .map_or(DVec3::ZERO, |ke| DVec3::new(ke[0], ke[1], ke[2]));
         let name = if m.name.is_empty() {
             "unnamed"
         } else {
@@ -246,7 +246,7 @@ pub fn read_obj(path: &Path) -> Result<PolygonMesh, SceneError> {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
         for p in m.positions.chunks_exact(3) {
-            let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+            let v = DVec3::new(p[0], p[1], p[2]);
             if !v.is_finite() {
                 return Err(non_finite_vertex(path, &bytes));
             }
