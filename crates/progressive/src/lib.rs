@@ -1,1 +1,94 @@
-//! radlab-progressive (to be written).
+//! # radlab-progressive: progressive refinement radiosity
+//!
+//! Solves the diffuse radiosity equation B = E + ρ F B over a piecewise-constant mesh by *shooting*
+//! (Cohen, Chen, Wallace & Greenberg 1988), Southwell's relaxation: every patch keeps the radiosity it has
+//! received but not yet passed on (its *unshot* radiosity ΔB); each shot takes the patch with the most unshot
+//! power A ΔB and distributes it to every receiving element,
+//!
+//! ΔB_e = ρ_e ΔB_j F_{e→j},
+//!
+//! with F_{e→j} evaluated from the receiver's own points toward the shooter (the exact point-to-polygon factor,
+//! times a visibility fraction from rays). Only one column of the form-factor matrix exists at a time, so memory
+//! is O(n) and an incomplete solution is always available — direct light first, then the brightest
+//! interreflections.
+//!
+//! Around the shooting loop:
+//! - **Substructuring** (Cohen, Greenberg, Immel & Brock 1986): coarse *patches* shoot, finer *elements*
+//!   receive; a patch's radiosity is the area-weighted mean of its elements.
+//! - **Adaptive subdivision**: after each step, neighbouring elements of a face whose radiosities differ by more
+//!   than a relative threshold are split in four (down to a minimum size); new elements re-gather from every
+//!   patch shot so far, so they hold what they would have held had they existed from the start.
+//! - **Ambient term** (Cohen et al. 1988): an estimate of the light not yet shot, added to displayed radiosity
+//!   only when asked for.
+//! - **Stopping rule**: stop when the unshot power is a given fraction of the emitted power. In a closed scene
+//!   of reflectance ρ the radiosity is then short by about ρ times that fraction.
+//!
+//! Results are deterministic: every random choice is a function of (seed, element, patch), and sums are taken
+//! in a fixed order, so a run is bit-identical for any rayon thread count.
+//!
+//! ## Parameters ([`ProgressiveParams`])
+//!
+//! | name | default | meaning |
+//! |---|---|---|
+//! | `element_size` | 1/20 of the scene's bounding diagonal | receiving element size (longest edge, scene units) |
+//! | `patch_size` | 2 × `element_size` | shooting patch size; `= element_size` turns substructuring off |
+//! | `shots_per_step` | 1 | shots per `step()`; changes only the granularity, never the answer |
+//! | `visibility` | `jittered4x4` | visibility between element and an emitting shooter (direct light): `unoccluded`, `centre`, `jittered2x2`, `jittered4x4` (16 rays), `jittered8x8` |
+//! | `indirect_visibility` | `jittered2x2` | the same for shooters that do not emit (interreflected light) |
+//! | `quadrature` | 1 | m × m receiver points per element (1 = centroid) |
+//! | `stop_unshot_fraction` | 2e-3 | stop when unshot power ≤ this fraction of emitted power |
+//! | `max_shots` | none | stop after this many shots |
+//! | `adaptive` | true | adaptive subdivision on/off |
+//! | `adaptive_threshold` | 0.3 | relative contrast \|B_a − B_b\| / max(B_a, B_b) that splits neighbours |
+//! | `min_element_size` | `element_size` / 4 | smallest edge subdivision creates |
+//! | `ambient` | false | add the ambient term to displayed radiosity (keep off when measuring error) |
+//! | `memory_budget_mib` | 2048 | refuse meshes and refinements needing more |
+//!
+//! Every default length is relative to the scene's size, the threshold is a relative contrast and the stopping
+//! rule a fraction of emitted power, so the defaults behave the same at any scene scale and light level.
+//! [`ProgressiveParams::fixed_mesh`] gives the settings under which the method solves the matrix method's
+//! discretisation (same regular mesh, kernel and visibility) for cross-checks; the matrix method also
+//! symmetrises each pair, so the two agree to within the receiver quadrature's reciprocity error (1.9e-3 at
+//! 2 × 2 points and 3e-5 at 4 × 4 on a room meshed on one grid).
+//!
+//! ## Cost
+//!
+//! A shot costs one form factor (and its `visibility` or `indirect_visibility` rays) per receiving element: O(n) for n elements. The number
+//! of shots grows with the number of patches N and with the reflectance: for a closed scene of reflectance ρ,
+//! about N ln(1/ε) / (1 − ρ) shots bring the unshot fraction to ε, so the whole solution costs
+//! O(N n ln(1/ε) / (1 − ρ)) — quadratic in the mesh, like the matrix method, but with O(n) memory and a usable
+//! picture after the first few shots. A split element re-gathers from every patch shot so far (one matrix row).
+//! Memory: O(n + N).
+//!
+//! Measured on the Cornell box (`builtin:cornell`, 2 cores, `cargo bench -p radlab-progressive --bench
+//! measure`): the defaults make 288 patches and 1,152 elements, refined to 3,606, and stop after 1,181 shots
+//! in 1.7–3.4 s with an area-weighted relative L1 error of 6.0 % against the path-traced reference (noise
+//! floor 1.7 %), holding 1.7 MB; matrix radiosity at its defaults reaches 7.2 % with 1,087 elements in about
+//! 1 s, holding 9.7 MB. At equal element counts (no substructuring) the memory ratio is 13× at 1,087
+//! elements and 47× at 4,100. Time against element count without substructuring fits a log-log slope of
+//! 1.7–1.9.
+//!
+//! ## When it does badly
+//!
+//! - **High reflectance in closed scenes** (ρ → 1): the shot count grows as 1/(1 − ρ); at ρ = 0.999 a furnace
+//!   needs thousands of shots per patch. The ambient term hides the missing light on screen but not in the
+//!   solution.
+//! - **Large meshes**: time grows roughly quadratically with the element count (every shot visits every
+//!   element); hierarchical methods scale better.
+//! - **Piecewise-constant elements** show their edges: adaptive subdivision refines shadow boundaries but only
+//!   where a neighbour's contrast reveals them, and an element smaller than `min_element_size` is never made.
+//! - **Substructuring** shoots a patch's mean radiosity uniformly: receivers very close to a patch with a
+//!   strong gradient across it see a smoothed source. Set `patch_size = element_size` when that matters.
+//! - **Visibility noise**: `jittered4x4` estimates each visibility fraction from 16 rays; penumbrae carry that
+//!   noise, and contrast from it can trigger subdivision.
+
+mod adaptive_subdivision;
+mod ambient;
+mod element_location;
+pub mod params;
+mod shooting;
+mod solver;
+mod substructuring;
+
+pub use params::ProgressiveParams;
+pub use solver::{ElementView, ProgressiveSolution, ProgressiveSolver, StopReason};

@@ -1,0 +1,220 @@
+//! Adaptive subdivision of receiving elements (Cohen, Greenberg, Immel & Brock 1986; used with progressive
+//! refinement by Cohen, Chen, Wallace & Greenberg 1988).
+//!
+//! Two elements of one face are neighbours when a point just outside an edge of one (at a quarter and three
+//! quarters along the edge) lies in the other. Where neighbouring radiosities differ by more than a threshold,
+//!
+//! |B_a − B_b| / max(B_a, B_b) > τ   (B summed over the RGB channels),
+//!
+//! both are split into four ([`radlab_scene::Polygon::split4`]) unless that would make an edge shorter than the
+//! minimum element size. A new element e gets its radiosity by re-gathering from every patch shot so far:
+//!
+//! B_e = E_e + ρ_e Σ_j F_{e→j} S_j,
+//!
+//! S_j the total radiosity patch j has shot — exactly what e would hold had it existed from the start, since
+//! every shot of j adds ρ_e F_{e→j} ΔB_j with the same factor. The parent's patch then corrects its unshot
+//! radiosity by the change of its area-mean radiosity, ΔB_p += Σ_c A_c B_c / A_p − A_e B_e / A_p, keeping
+//! B_p = S_p + ΔB_p. Splitting repeats until no neighbour pair exceeds the threshold or the minimum size is
+//! reached.
+
+use glam::DVec3;
+use radlab_scene::{Accel, Rgb, Scene, SolveError};
+use rayon::prelude::*;
+
+use crate::element_location::ElementLocator;
+use crate::shooting::{Kernel, Work, element_patch_factor};
+use crate::substructuring::{BYTES_PER_ELEMENT, Element, LEAF, Mesh};
+
+/// Where along an edge the neighbour probes go.
+const PROBE_AT: [f64; 2] = [0.25, 0.75];
+/// How far outside an edge a probe goes, relative to the element's longest edge.
+const PROBE_OFFSET: f64 = 1e-4;
+
+/// Relative contrast |a − b| / max(a, b) of two radiosities (channel sums); 0 when both are 0.
+pub(crate) fn contrast(a: Rgb, b: Rgb) -> f64 {
+    let (ga, gb) = (a.element_sum(), b.element_sum());
+    let m = ga.abs().max(gb.abs());
+    if m > 0.0 { (ga - gb).abs() / m } else { 0.0 }
+}
+
+/// Neighbouring leaf pairs (a < b), sorted, each once.
+pub(crate) fn neighbour_pairs(
+    scene: &Scene,
+    mesh: &Mesh,
+    locator: &ElementLocator,
+) -> Vec<(u32, u32)> {
+    let probe = |&e: &u32| -> Vec<(u32, u32)> {
+        let el = &mesh.elements[e as usize];
+        let n = scene.faces[el.face as usize].normal;
+        let v = el.polygon.vertices();
+        let offset = PROBE_OFFSET * el.polygon.max_edge();
+        let mut out = Vec::with_capacity(2 * v.len());
+        for k in 0..v.len() {
+            let (a, b) = (v[k], v[(k + 1) % v.len()]);
+            let outward = (b - a).cross(n).normalize_or_zero();
+            for t in PROBE_AT {
+                let p: DVec3 = a.lerp(b, t) + offset * outward;
+                match locator.locate_containing(mesh, el.face as usize, p) {
+                    Some(o) if o != e => out.push((e.min(o), e.max(o))),
+                    _ => {}
+                }
+            }
+        }
+        out
+    };
+    let mut pairs: Vec<(u32, u32)> = mesh.leaves.par_iter().flat_map_iter(probe).collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+/// Settings of a refinement pass.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Refinement {
+    /// Contrast above which neighbours split.
+    pub threshold: f64,
+    /// Smallest edge a child may have.
+    pub min_element_size: f64,
+    /// Most elements the arena may hold.
+    pub max_elements: usize,
+}
+
+/// Whether `el` may be split: its children's longest edge would not fall below the minimum size.
+fn splittable(el: &Element, min_size: f64) -> bool {
+    0.5 * el.polygon.max_edge() >= min_size * (1.0 - 1e-9)
+}
+
+/// Splits leaves across contrasts above the threshold until none remain; new elements re-gather from every
+/// patch shot so far. `pairs` holds the neighbour pairs of the current leaves and is kept up to date.
+/// Returns the number of elements split and the form-factor work.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine(
+    scene: &Scene,
+    accel: &Accel,
+    kernel: &Kernel,
+    mesh: &mut Mesh,
+    locator: &ElementLocator,
+    pairs: &mut Vec<(u32, u32)>,
+    shot_patches: &[u32],
+    r: &Refinement,
+) -> Result<(usize, Work), SolveError> {
+    let mut split_total = 0;
+    let mut work = Work::default();
+    loop {
+        let mut marked: Vec<u32> = Vec::new();
+        for &(a, b) in pairs.iter() {
+            let (ea, eb) = (&mesh.elements[a as usize], &mesh.elements[b as usize]);
+            if contrast(ea.radiosity, eb.radiosity) > r.threshold {
+                for (id, el) in [(a, ea), (b, eb)] {
+                    if splittable(el, r.min_element_size) {
+                        marked.push(id);
+                    }
+                }
+            }
+        }
+        marked.sort_unstable();
+        marked.dedup();
+        if marked.is_empty() {
+            return Ok((split_total, work));
+        }
+        let new_total = mesh.elements.len() + 4 * marked.len();
+        if new_total > r.max_elements {
+            return Err(SolveError::over_budget(
+                "adaptive subdivision",
+                (new_total as f64 * BYTES_PER_ELEMENT) as u64,
+                (r.max_elements as f64 * BYTES_PER_ELEMENT) as u64,
+                "raise min_element_size, adaptive_threshold or memory_budget_mib, or set adaptive = false",
+            ));
+        }
+        // Create the children, in the order of their parents.
+        let first_new = mesh.elements.len();
+        for &e in &marked {
+            let parent = mesh.elements[e as usize];
+            mesh.elements[e as usize].first_child = mesh.elements.len() as u32;
+            for polygon in parent.polygon.split4() {
+                mesh.elements.push(Element {
+                    polygon,
+                    area: polygon.area(),
+                    first_child: LEAF,
+                    ..parent
+                });
+            }
+        }
+        // Re-gather: B_c = E + ρ Σ_j F_cj S_j over the patches shot so far, in shot order.
+        let elements = &mesh.elements;
+        let patches = &mesh.patches;
+        let gathered: Vec<(Rgb, Work)> = (first_new..elements.len())
+            .into_par_iter()
+            .map(|c| {
+                let el = &elements[c];
+                let f = el.face as usize;
+                let rho = scene.reflectance(f);
+                let mut sum = Rgb::ZERO;
+                let mut w = Work::default();
+                if rho != Rgb::ZERO {
+                    for &j in shot_patches {
+                        let p = &patches[j as usize];
+                        let (ff, ww) =
+                            element_patch_factor(scene, accel, kernel, el, c as u32, p, j);
+                        w += ww;
+                        sum += ff * p.shot;
+                    }
+                }
+                (scene.emission(f) + rho * sum, w)
+            })
+            .collect();
+        for (k, (b, w)) in gathered.into_iter().enumerate() {
+            mesh.elements[first_new + k].radiosity = b;
+            work += w;
+        }
+        // Correct each parent's patch by the change of its area-mean radiosity.
+        for &e in &marked {
+            let parent = mesh.elements[e as usize];
+            let c0 = parent.first_child as usize;
+            let after: Rgb = mesh.elements[c0..c0 + 4]
+                .iter()
+                .map(|c| c.area * c.radiosity)
+                .sum();
+            let patch = &mut mesh.patches[parent.patch as usize];
+            patch.unshot += (after - parent.area * parent.radiosity) / patch.area;
+        }
+        // New leaves: drop the split ones, add the children, keep ascending order.
+        mesh.leaves.retain(|&e| mesh.elements[e as usize].is_leaf());
+        mesh.leaves
+            .extend(first_new as u32..mesh.elements.len() as u32);
+        split_total += marked.len();
+        *pairs = neighbour_pairs(scene, mesh, locator);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contrast_is_relative_and_symmetric() {
+        let a = Rgb::new(1.0, 2.0, 3.0);
+        assert_eq!(contrast(a, a), 0.0);
+        assert!((contrast(a, 0.5 * a) - 0.5).abs() < 1e-15);
+        assert_eq!(contrast(a, 0.5 * a), contrast(0.5 * a, a));
+        assert_eq!(contrast(Rgb::ZERO, Rgb::ZERO), 0.0);
+        // Scale-free: multiplying both by any factor keeps the contrast.
+        assert!((contrast(1e-30 * a, 0.7e-30 * a) - contrast(a, 0.7 * a)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn grid_neighbours_are_edge_sharing_elements_of_one_face() {
+        let scene = radlab_scene::builtin("furnace-cube?tessellation=1").expect("scene");
+        let mesh = Mesh::new(&scene, 1.0, 0.25, 1e9).expect("mesh");
+        let loc = ElementLocator::new(&scene, &mesh);
+        let pairs = neighbour_pairs(&scene, &mesh, &loc);
+        // A 4 × 4 grid has 2 · 4 · 3 = 24 edge-sharing pairs; six faces.
+        assert_eq!(pairs.len(), 6 * 24);
+        for (a, b) in pairs {
+            let (ea, eb) = (&mesh.elements[a as usize], &mesh.elements[b as usize]);
+            assert_eq!(ea.face, eb.face);
+            let d = (ea.polygon.centroid() - eb.polygon.centroid()).length();
+            assert!((d - 0.25).abs() < 1e-12, "{d}");
+        }
+    }
+}

@@ -1,0 +1,264 @@
+//! Substructuring (Cohen, Greenberg, Immel & Brock 1986, "An efficient radiosity approach for realistic image
+//! synthesis"): a two-level mesh in which coarse *patches* shoot and finer *elements* receive.
+//!
+//! Every face is split regularly into patches no longer than `patch_size`, every patch regularly into elements
+//! no longer than `element_size`, and adaptive subdivision later splits elements into quadtrees
+//! ([`radlab_scene::Polygon::split4`]). A patch's radiosity is the area-weighted mean of its elements
+//! (Cohen et al. 1986):
+//!
+//! B_p = Σ_{e ⊂ p} A_e B_e / A_p,
+//!
+//! and the radiosity it shoots is its unshot part ΔB_p. Each patch keeps the invariant B_p = S_p + ΔB_p, where
+//! S_p is the total radiosity it has shot so far; that total is what elements created later re-gather from.
+
+use std::ops::Range;
+
+use radlab_scene::{Polygon, Rgb, Scene, SolveError};
+
+/// A shooting patch.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Patch {
+    /// Its geometry.
+    pub polygon: Polygon,
+    /// Area: the sum of its elements' areas, so area means over elements are exact.
+    pub area: f64,
+    /// The input face it belongs to.
+    pub face: u32,
+    /// Whether its face emits (its shots are direct light).
+    pub emits: bool,
+    /// Unshot radiosity ΔB_p (W/m²). May turn slightly negative after adaptive subdivision corrects B_p.
+    pub unshot: Rgb,
+    /// Total radiosity shot so far, S_p.
+    pub shot: Rgb,
+    /// Its top-level elements: `first_root .. first_root + root_count` in the element arena.
+    pub first_root: u32,
+    /// Number of top-level elements.
+    pub root_count: u32,
+}
+
+/// An element: a node of the element quadtrees (leaves receive and carry the solution).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Element {
+    /// Its geometry.
+    pub polygon: Polygon,
+    /// Area.
+    pub area: f64,
+    /// The input face it lies on.
+    pub face: u32,
+    /// The patch it belongs to.
+    pub patch: u32,
+    /// First of its four children (consecutive), or [`LEAF`].
+    pub first_child: u32,
+    /// Radiosity B_e (W/m²), including emission. Meaningful for leaves; a split element keeps its last value.
+    pub radiosity: Rgb,
+}
+
+/// `first_child` of a leaf.
+pub(crate) const LEAF: u32 = u32::MAX;
+
+impl Element {
+    /// Whether it has no children.
+    pub fn is_leaf(&self) -> bool {
+        self.first_child == LEAF
+    }
+}
+
+/// Patches, the element arena and the current leaves.
+#[derive(Clone, Debug)]
+pub(crate) struct Mesh {
+    /// All patches, those of face f contiguous and in face order.
+    pub patches: Vec<Patch>,
+    /// All elements ever created (split ones stay, as interior quadtree nodes).
+    pub elements: Vec<Element>,
+    /// The leaves, in ascending element index.
+    pub leaves: Vec<u32>,
+    /// Top-level elements of face f: `face_roots[f] .. face_roots[f + 1]`.
+    pub face_roots: Vec<u32>,
+}
+
+/// Slack on the element size so a patch cut to exactly `element_size` is not split again by rounding.
+const SIZE_SLACK: f64 = 1.0 + 1e-9;
+
+/// Pieces [`Polygon::subdivide`] makes of `poly` at `size` (same rule, without building them).
+pub(crate) fn piece_count(poly: &Polygon, size: f64) -> f64 {
+    let segs = |len: f64| -> f64 {
+        if size.is_nan() || size <= 0.0 || !len.is_finite() {
+            1.0
+        } else {
+            (len / size).ceil().clamp(1.0, 4096.0)
+        }
+    };
+    let v = poly.vertices();
+    if v.len() == 4 {
+        segs((v[1] - v[0]).length().max((v[2] - v[3]).length()))
+            * segs((v[3] - v[0]).length().max((v[2] - v[1]).length()))
+    } else {
+        let m = segs(poly.max_edge());
+        m * m
+    }
+}
+
+/// Bytes held per element, for budgets and reports: the element, its leaf entry, its place in the face grid and
+/// its share of the neighbour pairs.
+pub(crate) const BYTES_PER_ELEMENT: f64 = (size_of::<Element>() + 4 + 8 + 4 * 8) as f64;
+
+impl Mesh {
+    /// Meshes every face into patches of `patch_size` and elements of `element_size`. Emitting faces start with
+    /// B = ΔB = E; the rest with zero. Refuses a mesh whose estimated size exceeds `budget_bytes`.
+    pub fn new(
+        scene: &Scene,
+        patch_size: f64,
+        element_size: f64,
+        budget_bytes: f64,
+    ) -> Result<Self, SolveError> {
+        // Upper bound on the element count before allocating anything: per direction, a face of length L cut
+        // into k patches then into elements has at most ceil(L / element_size) + k pieces.
+        let mut estimate = 0.0;
+        for f in 0..scene.face_count() {
+            let poly = scene.polygon(f);
+            let p = piece_count(&poly, patch_size);
+            let e = piece_count(&poly, element_size);
+            estimate += (e.sqrt() + p.sqrt()).powi(2);
+        }
+        let needed = estimate * BYTES_PER_ELEMENT;
+        if needed > budget_bytes {
+            return Err(SolveError::over_budget(
+                "the progressive radiosity element mesh",
+                needed as u64,
+                budget_bytes as u64,
+                "raise element_size (and patch_size) or memory_budget_mib",
+            ));
+        }
+        let mut patches = Vec::new();
+        let mut elements = Vec::new();
+        let mut face_roots = Vec::with_capacity(scene.face_count() + 1);
+        for f in 0..scene.face_count() {
+            face_roots.push(elements.len() as u32);
+            let e_face = scene.emission(f);
+            for pp in scene.polygon(f).subdivide(patch_size) {
+                let first_root = elements.len() as u32;
+                let pieces = if patch_size == element_size {
+                    vec![pp]
+                } else {
+                    pp.subdivide(element_size * SIZE_SLACK)
+                };
+                let mut area = 0.0;
+                for polygon in pieces {
+                    let a = polygon.area();
+                    area += a;
+                    elements.push(Element {
+                        polygon,
+                        area: a,
+                        face: f as u32,
+                        patch: patches.len() as u32,
+                        first_child: LEAF,
+                        radiosity: e_face,
+                    });
+                }
+                patches.push(Patch {
+                    polygon: pp,
+                    area,
+                    face: f as u32,
+                    emits: scene.material(f).is_emitter(),
+                    unshot: e_face,
+                    shot: Rgb::ZERO,
+                    first_root,
+                    root_count: elements.len() as u32 - first_root,
+                });
+            }
+        }
+        face_roots.push(elements.len() as u32);
+        let leaves = (0..elements.len() as u32).collect();
+        Ok(Self {
+            patches,
+            elements,
+            leaves,
+            face_roots,
+        })
+    }
+
+    /// Top-level elements of face `f`.
+    pub fn roots_of(&self, f: usize) -> Range<usize> {
+        self.face_roots[f] as usize..self.face_roots[f + 1] as usize
+    }
+
+    /// The leaves below element `e` (itself if a leaf), in depth-first order.
+    pub fn leaves_below(&self, e: u32, out: &mut Vec<u32>) {
+        let el = &self.elements[e as usize];
+        if el.is_leaf() {
+            out.push(e);
+        } else {
+            for c in el.first_child..el.first_child + 4 {
+                self.leaves_below(c, out);
+            }
+        }
+    }
+
+    /// Radiosity of patch `p`: the area-weighted mean of its leaves (Cohen et al. 1986).
+    pub fn patch_radiosity(&self, p: usize) -> Rgb {
+        let patch = &self.patches[p];
+        let mut leaves = Vec::new();
+        for r in patch.first_root..patch.first_root + patch.root_count {
+            self.leaves_below(r, &mut leaves);
+        }
+        let sum: Rgb = leaves
+            .iter()
+            .map(|&e| {
+                let el = &self.elements[e as usize];
+                el.radiosity * el.area
+            })
+            .sum();
+        sum / patch.area
+    }
+
+    /// Approximate heap bytes held.
+    pub fn bytes(&self) -> usize {
+        self.patches.capacity() * size_of::<Patch>()
+            + self.elements.capacity() * size_of::<Element>()
+            + self.leaves.capacity() * 4
+            + self.face_roots.capacity() * 4
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn elements_nest_in_patches_and_conserve_area() {
+        let scene = radlab_scene::builtin("furnace-cube?tessellation=1&emission=2").expect("scene");
+        let m = Mesh::new(&scene, 0.5, 0.25, 1e9).expect("mesh");
+        assert_eq!(m.patches.len(), 6 * 4);
+        assert_eq!(m.elements.len(), 6 * 16);
+        assert_eq!(m.leaves.len(), m.elements.len());
+        for (p, patch) in m.patches.iter().enumerate() {
+            assert_eq!(patch.root_count, 4);
+            assert!((patch.area - patch.polygon.area()).abs() < 1e-14);
+            for r in patch.first_root..patch.first_root + patch.root_count {
+                let e = &m.elements[r as usize];
+                assert_eq!(e.patch as usize, p);
+                assert!(patch.polygon.contains(e.polygon.centroid(), 1e-12));
+            }
+            // Patch radiosity is the area mean: B = E = 2 everywhere here, and B_p = S_p + ΔB_p.
+            let b = m.patch_radiosity(p);
+            assert!((b - Rgb::splat(2.0)).abs().max_element() < 1e-14);
+            assert_eq!(patch.unshot + patch.shot, b);
+        }
+        // patch_size == element_size: one element per patch, identical to the scene's ElementMesh.
+        let m = Mesh::new(&scene, 0.25, 0.25, 1e9).expect("mesh");
+        let reference = radlab_scene::ElementMesh::new(&scene, 0.25);
+        assert_eq!(m.elements.len(), reference.len());
+        for (a, b) in m.elements.iter().zip(&reference.elements) {
+            assert_eq!(a.polygon, b.polygon);
+        }
+    }
+
+    #[test]
+    fn over_budget_is_refused_before_allocating() {
+        let scene = radlab_scene::builtin("furnace-cube").expect("scene");
+        let e = Mesh::new(&scene, 1e-4, 1e-4, 1e9)
+            .expect_err("too many elements")
+            .to_string();
+        assert!(e.contains("memory_budget_mib"), "{e}");
+    }
+}
