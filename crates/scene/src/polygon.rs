@@ -64,10 +64,12 @@ impl Polygon {
 
     /// Vector area: ½ Σ v_k × v_{k+1}. Its length is the area, its direction the normal.
     pub fn vector_area(&self) -> DVec3 {
+        // Relative to the first vertex (the same sum, since Σ v0 × (v_{k+1} − v_k) = 0), so a small polygon
+        // far from the origin keeps its digits.
         let v = self.vertices();
         let mut s = DVec3::ZERO;
-        for k in 0..v.len() {
-            s += v[k].cross(v[(k + 1) % v.len()]);
+        for k in 1..v.len() - 1 {
+            s += (v[k] - v[0]).cross(v[k + 1] - v[0]);
         }
         0.5 * s
     }
@@ -355,6 +357,24 @@ mod tests {
             let total: f64 = kids.iter().map(|k| k.area()).sum();
             assert!((total - p.area()).abs() < 1e-12 * p.area());
         }
+    }
+
+    #[test]
+    fn vector_area_keeps_its_digits_far_from_the_origin() {
+        let o = dvec3(5.0, -3.0, 7.0);
+        let s = 1e-4;
+        let q = Polygon::quad(
+            o,
+            o + dvec3(s, 0., 0.),
+            o + dvec3(s, s, 0.),
+            o + dvec3(0., s, 0.),
+        );
+        assert!(
+            (q.area() / (s * s) - 1.0).abs() < 1e-11,
+            "{}",
+            q.area() / (s * s)
+        );
+        assert!((q.normal() - DVec3::Z).length() < 1e-11);
     }
 
     #[test]
