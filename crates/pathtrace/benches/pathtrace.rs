@@ -35,11 +35,7 @@ use radlab_scene::{Accel, Scene, Solver, builtin, evaluation_points};
 fn surface_points(scene: &Scene, count: usize) -> Vec<SurfacePoint> {
     evaluation_points(scene, count, 1)
         .iter()
-        .map(|p| SurfacePoint {
-            face: p.face,
-            point: p.point,
-            normal: p.normal,
-        })
+        .map(Into::into)
         .collect()
 }
 

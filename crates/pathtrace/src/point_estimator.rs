@@ -94,6 +94,16 @@ pub struct SurfacePoint {
     pub normal: DVec3,
 }
 
+impl From<&radlab_scene::EvalPoint> for SurfacePoint {
+    fn from(p: &radlab_scene::EvalPoint) -> Self {
+        Self {
+            face: p.face,
+            point: p.point,
+            normal: p.normal,
+        }
+    }
+}
+
 /// The estimate at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointEstimate {

@@ -142,11 +142,7 @@ fn check_direct(
     let accel = Accel::new(&scene);
     let pts: Vec<SurfacePoint> = evaluation_points(&scene, 24, 5)
         .iter()
-        .map(|p| SurfacePoint {
-            face: p.face,
-            point: p.point,
-            normal: p.normal,
-        })
+        .map(Into::into)
         .collect();
     assert_eq!(pts.len(), 24);
     let emitter = scene.polygon(emitter_face);
@@ -246,11 +242,7 @@ fn point_estimator_error_falls_as_one_over_sqrt_samples() {
     let emitter = scene.polygon(1);
     let pts: Vec<SurfacePoint> = evaluation_points(&scene, 64, 1)
         .iter()
-        .map(|p| SurfacePoint {
-            face: p.face,
-            point: p.point,
-            normal: p.normal,
-        })
+        .map(Into::into)
         .collect();
     let exact: Vec<f64> = pts
         .iter()
@@ -732,11 +724,7 @@ fn an_emitter_facing_away_lights_nothing() {
     let accel = Accel::new(&scene);
     let pts: Vec<SurfacePoint> = evaluation_points(&scene, 8, 2)
         .iter()
-        .map(|p| SurfacePoint {
-            face: p.face,
-            point: p.point,
-            normal: p.normal,
-        })
+        .map(Into::into)
         .collect();
     for e in estimate_points(&scene, &accel, &pts, &params(256, DirectSampling::Mis), 1) {
         assert_eq!((e.mean, e.std_error), (Rgb::ZERO, Rgb::ZERO));

@@ -33,14 +33,7 @@ struct Reference {
 
 fn reference(scene: &Scene, accel: &Accel, count: usize, samples: u32) -> Reference {
     let points = evaluation_points(scene, count, 1);
-    let sp: Vec<SurfacePoint> = points
-        .iter()
-        .map(|p| SurfacePoint {
-            face: p.face,
-            point: p.point,
-            normal: p.normal,
-        })
-        .collect();
+    let sp: Vec<SurfacePoint> = points.iter().map(Into::into).collect();
     let t = Instant::now();
     let est = estimate_points(
         scene,

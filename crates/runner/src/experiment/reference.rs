@@ -173,14 +173,7 @@ pub fn reference(
                 samples: cfg.samples,
                 ..Default::default()
             };
-            let pts: Vec<radlab_pathtrace::SurfacePoint> = points
-                .iter()
-                .map(|p| radlab_pathtrace::SurfacePoint {
-                    face: p.face,
-                    point: p.point,
-                    normal: p.normal,
-                })
-                .collect();
+            let pts: Vec<radlab_pathtrace::SurfacePoint> = points.iter().map(Into::into).collect();
             let est = radlab_pathtrace::estimate_points_with_progress(
                 scene, accel, &pts, &params, cfg.seed, progress,
             );

@@ -8,8 +8,8 @@
 //! vertices (a file cut short); real `p`/`l` elements are skipped and counted.
 //!
 //! tobj reports no line numbers, so this reader counts the lines tobj has consumed when it fails, and scans
-//! the file itself to name the line of a non-finite vertex or an out-of-range face index. Positions are read
-//! by tobj in single precision (f32), then widened.
+//! the file itself to name the line of a non-finite vertex or an out-of-range face index. Positions and
+//! colours are read by tobj in double precision (its `use_f64` feature).
 
 use std::cell::RefCell;
 use std::io::{BufRead, Read};
@@ -321,13 +321,13 @@ fn statements(bytes: &[u8]) -> impl Iterator<Item = (usize, &str, std::str::Spli
 fn non_finite_vertex(path: &Path, bytes: &[u8]) -> SceneError {
     for (line, key, toks) in statements(bytes) {
         if key == "v" {
-            let vals: Vec<f32> = toks.take(4).filter_map(|s| s.parse().ok()).collect();
+            let vals: Vec<f64> = toks.take(4).filter_map(|s| s.parse().ok()).collect();
             let w = vals.get(3).copied().unwrap_or(1.0);
             if vals.iter().take(3).any(|v| !(v / w).is_finite()) {
                 return parse_error(
                     path,
                     line,
-                    "this vertex is not finite (NaN or infinite, or beyond single precision); every \
+                    "this vertex is not finite (NaN or infinite); every \
                      coordinate must be a finite number",
                 );
             }
