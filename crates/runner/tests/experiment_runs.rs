@@ -195,93 +195,56 @@ fn shards_cover_every_run_once_and_merge() {
     );
 }
 
+/// Runs the one-scene tiny experiment with `limits` appended to its [limits] table and `env` set; checks the
+/// experiment itself succeeds and returns each run's (outcome, message).
+fn run_isolated(
+    dir: &Path,
+    name: &str,
+    limits: &str,
+    env: &[(&str, &str)],
+) -> Vec<(String, String)> {
+    let body = TINY
+        .replace(
+            "[[scenes]]\nscene = \"builtin:cornell\"\nlabel = \"cornell\"\n",
+            "",
+        )
+        .replace("time_limit = 20", &format!("time_limit = 20\n{limits}"));
+    let cfg = write_config(dir, &format!("{name}.toml"), &body);
+    let out = dir.join(name);
+    let o = radlab(
+        dir,
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
+        env,
+    );
+    assert!(o.status.success(), "the experiment finishes: {}", text(&o));
+    let rdr = csv::Reader::from_path(out.join("runs.csv")).expect("runs.csv");
+    let runs: Vec<radlab_runner::experiment::execute::RunResult> =
+        rdr.into_deserialize().map(|r| r.expect("row")).collect();
+    assert_eq!(runs.len(), 2);
+    runs.into_iter().map(|r| (r.outcome, r.message)).collect()
+}
+
 #[test]
 fn crash_timeout_and_memory_limit_are_recorded() {
     let tmp = tempfile::tempdir().expect("tmp");
-    let base = TINY.replace(
-        "[[scenes]]\nscene = \"builtin:cornell\"\nlabel = \"cornell\"\n",
-        "",
-    );
     // A panicking child.
-    let cfg = write_config(tmp.path(), "crash.toml", &base);
-    let out = tmp.path().join("crash");
-    let o = radlab(
-        tmp.path(),
-        &[
-            "run",
-            cfg.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &[("RADLAB_FAULT", "panic")],
-    );
-    assert!(o.status.success(), "the experiment finishes: {}", text(&o));
-    let runs = csv_rows(&out.join("runs.csv"));
-    assert_eq!(runs.len(), 2);
-    let header = csv::Reader::from_path(out.join("runs.csv"))
-        .expect("csv")
-        .headers()
-        .expect("h")
-        .clone();
-    let col = header
-        .iter()
-        .position(|h| h == "outcome")
-        .expect("outcome column");
-    assert!(runs.iter().all(|r| &r[col] == "crash"), "{runs:?}");
-    let msg = header
-        .iter()
-        .position(|h| h == "message")
-        .expect("message column");
-    assert!(
-        runs.iter().all(|r| r[msg].contains("injected fault")),
-        "{runs:?}"
-    );
+    for (outcome, message) in run_isolated(tmp.path(), "crash", "", &[("RADLAB_FAULT", "panic")]) {
+        assert_eq!(outcome, "crash");
+        assert!(message.contains("injected fault"), "{message}");
+    }
     // A child killed for time.
-    let cfg = write_config(
-        tmp.path(),
-        "timeout.toml",
-        &base.replace("time_limit = 20", "time_limit = 20\nkill_after = 0.001"),
-    );
-    let out = tmp.path().join("timeout");
-    let o = radlab(
-        tmp.path(),
-        &[
-            "run",
-            cfg.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    assert!(
-        csv_rows(&out.join("runs.csv"))
-            .iter()
-            .all(|r| &r[col] == "timeout")
-    );
+    for (outcome, message) in run_isolated(tmp.path(), "timeout", "kill_after = 0.001", &[]) {
+        assert_eq!(outcome, "timeout", "{message}");
+    }
     // A child over its memory limit.
-    let cfg = write_config(
-        tmp.path(),
-        "oom.toml",
-        &base.replace("time_limit = 20", "time_limit = 20\nmemory_limit_mib = 1"),
-    );
-    let out = tmp.path().join("oom");
-    let o = radlab(
-        tmp.path(),
-        &[
-            "run",
-            cfg.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    assert!(
-        csv_rows(&out.join("runs.csv"))
-            .iter()
-            .all(|r| &r[col] == "out-of-memory")
-    );
+    for (outcome, message) in run_isolated(tmp.path(), "oom", "memory_limit_mib = 1", &[]) {
+        assert_eq!(outcome, "out-of-memory", "{message}");
+    }
 }
 
 #[test]
