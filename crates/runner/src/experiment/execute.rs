@@ -438,10 +438,11 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
     };
     let err_text = reader.join().unwrap_or_default();
     let _ = std::fs::remove_file(&job_file);
-    if let (Some(st), Ok(r)) = (status, read_result(&result_file))
+    let written = read_result(&result_file);
+    if let (Some(st), Ok(r)) = (status, &written)
         && (st.success() || r.outcome == "out-of-memory")
     {
-        return Ok(r);
+        return Ok(r.clone());
     }
     let mut r = base_result(job);
     // The panic message if there is one (the line after "panicked at"), otherwise the last lines of stderr.
@@ -460,9 +461,46 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
         }
         Some(st) => {
             r.outcome = "crash".into();
-            r.message = format!("child exited with {st}: {tail}");
+            r.message = match (st.success(), written) {
+                (true, Err(e)) => {
+                    format!("child exited with {st} but left no readable result: {e:#}")
+                }
+                _ => format!("child exited with {st}: {tail}"),
+            };
         }
     }
     write_result(&job.dir, &r)?;
     Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jobs_reach_the_child_bit_for_bit() {
+        // A log-range sweep value whose shortest decimal form needs a correctly rounded parser: the child must
+        // run with exactly the parent's parameters (and so compute the same run id).
+        let mut params = toml::Table::new();
+        params.insert("epsilon".into(), toml::Value::Float(0.009999999999999995));
+        params.insert(
+            "alpha".into(),
+            toml::Value::Float(f64::from_bits(0x3FB9_9999_9999_999A)),
+        );
+        let spec = RunSpec {
+            index: 13,
+            scene: "builtin:cornell".into(),
+            scene_label: "cornell".into(),
+            family: String::new(),
+            method: "hierarchical".into(),
+            label: "hierarchical".into(),
+            params,
+            sweep: String::new(),
+            seed: 1,
+        };
+        let text = serde_json::to_string(&spec).expect("serialise");
+        let back: RunSpec = serde_json::from_str(&text).expect("parse");
+        assert_eq!(back, spec);
+        assert_eq!(back.id(), spec.id());
+    }
 }
