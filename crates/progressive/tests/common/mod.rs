@@ -41,6 +41,45 @@ pub fn convex_room() -> Scene {
     room(1.0, false)
 }
 
+/// The floor (+z) and four inward walls of the box [0,1]³ mapped through `p`; the x = 0 wall is `red`.
+fn add_floor_and_walls(
+    b: &mut SceneBuilder,
+    p: &dyn Fn(f64, f64, f64) -> DVec3,
+    white: u32,
+    red: u32,
+) {
+    let quads = [
+        (
+            [p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)],
+            white,
+            "floor",
+        ),
+        (
+            [p(0., 0., 0.), p(0., 1., 0.), p(0., 1., 1.), p(0., 0., 1.)],
+            red,
+            "x0",
+        ),
+        (
+            [p(1., 0., 0.), p(1., 0., 1.), p(1., 1., 1.), p(1., 1., 0.)],
+            white,
+            "x1",
+        ),
+        (
+            [p(0., 0., 0.), p(0., 0., 1.), p(1., 0., 1.), p(1., 0., 0.)],
+            white,
+            "y0",
+        ),
+        (
+            [p(0., 1., 0.), p(1., 1., 0.), p(1., 1., 1.), p(0., 1., 1.)],
+            white,
+            "y1",
+        ),
+    ];
+    for (pts, m, what) in quads {
+        b.add_polygon_points(&pts, m, what).expect("f");
+    }
+}
+
 fn room(scale: f64, with_block: bool) -> Scene {
     let mut b = SceneBuilder::new("room");
     let white = b
@@ -55,36 +94,7 @@ fn room(scale: f64, with_block: bool) -> Scene {
     let s = scale;
     let p = |x: f64, y: f64, z: f64| dvec3(x, y, z) * s;
     // Floor (+z), walls, ceiling split 3 × 3 with the centre emitting (-z).
-    b.add_polygon_points(
-        &[p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)],
-        white,
-        "floor",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(0., 0., 0.), p(0., 1., 0.), p(0., 1., 1.), p(0., 0., 1.)],
-        red,
-        "x0",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(1., 0., 0.), p(1., 0., 1.), p(1., 1., 1.), p(1., 1., 0.)],
-        white,
-        "x1",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(0., 0., 0.), p(0., 0., 1.), p(1., 0., 1.), p(1., 0., 0.)],
-        white,
-        "y0",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(0., 1., 0.), p(1., 1., 0.), p(1., 1., 1.), p(0., 1., 1.)],
-        white,
-        "y1",
-    )
-    .expect("f");
+    add_floor_and_walls(&mut b, &p, white, red);
     let cuts = [0.0, 0.4, 0.6, 1.0];
     for j in 0..3 {
         for i in 0..3 {
@@ -119,36 +129,7 @@ pub fn aligned_room(with_block: bool) -> Scene {
         .add_material(Material::new("light", Rgb::splat(0.5), Rgb::new(10.0, 9.0, 8.0)).expect("m"))
         .expect("m");
     let p = |x: f64, y: f64, z: f64| dvec3(x, y, z);
-    b.add_polygon_points(
-        &[p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.)],
-        white,
-        "floor",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(0., 0., 0.), p(0., 1., 0.), p(0., 1., 1.), p(0., 0., 1.)],
-        red,
-        "x0",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(1., 0., 0.), p(1., 0., 1.), p(1., 1., 1.), p(1., 1., 0.)],
-        white,
-        "x1",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(0., 0., 0.), p(0., 0., 1.), p(1., 0., 1.), p(1., 0., 0.)],
-        white,
-        "y0",
-    )
-    .expect("f");
-    b.add_polygon_points(
-        &[p(0., 1., 0.), p(1., 1., 0.), p(1., 1., 1.), p(0., 1., 1.)],
-        white,
-        "y1",
-    )
-    .expect("f");
+    add_floor_and_walls(&mut b, &p, white, red);
     for j in 0..4 {
         for i in 0..4 {
             let (x0, y0) = (0.25 * i as f64, 0.25 * j as f64);
