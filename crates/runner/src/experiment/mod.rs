@@ -145,7 +145,6 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
         bar.finish_and_clear();
         let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
         let floor = metrics::noise_floor(&r.values, &r.std_error, &weights);
-        let ref_file = reference::cache_path(&refs_dir, &scene, &points, &cfg.reference, r.kind);
         if r.seconds > 0.0 {
             eprintln!(
                 "reference for {label}: {:?}, {:.1} s, noise floor L1 {:.2e}",
@@ -202,7 +201,7 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
                 digest: job_digest(&cfg, spec, r.kind),
                 dir: out.clone(),
                 faces: scene.faces.len() as u64,
-                reference_file: ref_file.clone(),
+                reference_file: r.file.clone(),
                 reference_kind: r.kind,
                 floor,
                 evaluation: cfg.evaluation.clone(),

@@ -30,6 +30,8 @@ pub struct Reference {
     pub std_error: Vec<Rgb>,
     /// Wall seconds it took (0 when read from the cache).
     pub seconds: f64,
+    /// The cache file holding it (what child runs read).
+    pub file: PathBuf,
 }
 
 /// A vertex position quantised to a grid, for matching shared edges.
@@ -116,7 +118,7 @@ fn direct(scene: &Scene, accel: &Accel, points: &[EvalPoint], seed: u64) -> Vec<
 }
 
 /// The cache file for a reference.
-pub fn cache_path(
+fn cache_path(
     dir: &Path,
     scene: &Scene,
     points: &[EvalPoint],
@@ -159,6 +161,7 @@ pub fn reference(
             values: r.0,
             std_error: r.1,
             seconds: 0.0,
+            file: path,
         });
     }
     let t0 = std::time::Instant::now();
@@ -190,6 +193,7 @@ pub fn reference(
         values,
         std_error,
         seconds,
+        file: path,
     })
 }
 
