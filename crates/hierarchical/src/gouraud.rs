@@ -14,8 +14,8 @@ use glam::DVec2;
 use radlab_scene::Rgb;
 
 use crate::hierarchy::Engine;
-use crate::link::Kernel;
-use crate::node::Patch;
+use crate::node::NodeKind;
+use crate::transport::Transport;
 
 type Key = [u32; 2];
 
@@ -24,9 +24,10 @@ fn mid(a: Key, b: Key) -> Option<Key> {
     (x % 2 == 0 && y % 2 == 0 && a != b).then_some([(x / 2) as u32, (y / 2) as u32])
 }
 
-/// Corner radiosities of every leaf of the subtree under `root` (pairs of leaf id and corner values).
-pub fn face_corner_values<K: Kernel<Patch>>(
-    engine: &Engine<Patch, K>,
+/// Corner radiosities of every leaf of the subtree under `root`, the node that is a whole input face (pairs of
+/// leaf id and corner values). Leaves that are not quadtree elements get none.
+pub fn face_corner_values<N: NodeKind, T: Transport<N>>(
+    engine: &Engine<N, T>,
     root: u32,
 ) -> Vec<(u32, [Rgb; 4])> {
     let mut leaves = Vec::new();
@@ -39,12 +40,17 @@ pub fn face_corner_values<K: Kernel<Patch>>(
         }
     }
     leaves.sort_unstable();
-    let nodes = engine.nodes();
+    leaves.retain(|&i| engine.nodes()[i as usize].patch().is_some());
+    let patch = |i: u32| {
+        engine.nodes()[i as usize]
+            .patch()
+            .expect("retained patches")
+    };
     let b = engine.radiosity();
     // Area-weighted means at corners.
     let mut sums: HashMap<Key, (Rgb, f64)> = HashMap::new();
     for &i in &leaves {
-        let p = &nodes[i as usize];
+        let p = patch(i);
         for k in 0..p.corners() {
             let e = sums.entry(p.uv[k]).or_insert((Rgb::ZERO, 0.0));
             e.0 += p.area * b[i as usize];
@@ -58,7 +64,7 @@ pub fn face_corner_values<K: Kernel<Patch>>(
     // T-vertices: lattice midpoints of leaf edges that are corners of other leaves.
     let mut constraints: Vec<(u64, Key, Key, Key)> = Vec::new();
     for &i in &leaves {
-        let p = &nodes[i as usize];
+        let p = patch(i);
         let n = p.corners();
         for k in 0..n {
             let mut edges = vec![(p.uv[k], p.uv[(k + 1) % n])];
@@ -86,7 +92,7 @@ pub fn face_corner_values<K: Kernel<Patch>>(
     leaves
         .iter()
         .map(|&i| {
-            let p = &nodes[i as usize];
+            let p = patch(i);
             let mut v = [Rgb::ZERO; 4];
             for (k, slot) in v.iter_mut().enumerate().take(p.corners()) {
                 *slot = value.get(&p.uv[k]).copied().unwrap_or_default();

@@ -1,14 +1,19 @@
-//! The simulation hierarchy and its links, generic over the node kind: a forest of nodes in one arena (a child
-//! is always created after its parent, so increasing ids visit parents first), links stored with their
-//! receivers, the radiosity of every node (leaves: the solution B = E + ρ H; inner nodes: the area mean of
-//! their children, Σ A_c B_c / A), and the counters the runner reads. Refinement ([`crate::refine`]),
+//! The simulation hierarchy and its links, generic over the node kind and its light model ([`Transport`]):
+//! a forest of nodes in one arena (a child is always created after its parent, so increasing ids visit parents
+//! first), links stored with their receivers, the radiosity of every node (leaves: the solution B = E + ρ H;
+//! inner nodes: the area mean of their children, Σ A_c B_c / A) and the transport's further exitance state,
+//! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows ([`crate::gather_rows`]),
 //! solution ([`crate::push_pull`]) and the schedules ([`crate::schedule`]) are methods of [`Engine`].
 
-use radlab_scene::{Rgb, SolveError};
+use radlab_scene::{FaceId, Rgb, SolveError};
 
-use crate::link::{Kernel, Link};
+use crate::link::Link;
 use crate::node::NodeKind;
 use crate::params::HierarchicalParams;
+use crate::transport::{NodeView, Transport};
+
+/// One cached gather entry of a target: the link (receiver node, index in its links) and its coefficient.
+pub(crate) type RowEntry<C> = (u32, u32, C);
 
 /// Marks "no node".
 pub const NONE: u32 = u32::MAX;
@@ -26,23 +31,33 @@ pub(crate) enum Phase {
     Done,
 }
 
-/// Hierarchical radiosity over nodes of kind `N` with links computed by kernel `K`.
+/// Hierarchical radiosity over nodes of kind `N`, light moved by transport `T`.
 #[derive(Debug)]
-pub struct Engine<N, K> {
+pub struct Engine<N, T: Transport<N>>
+where
+    N: NodeKind,
+{
     pub(crate) nodes: Vec<N>,
     pub(crate) parent: Vec<u32>,
     /// (first child, number of children); 0 children for a leaf.
     pub(crate) children: Vec<(u32, u32)>,
     pub(crate) links: Vec<Vec<Link>>,
     pub(crate) radiosity: Vec<Rgb>,
-    /// Per leaf, with [`crate::Gather::Leaf`]: (source, coefficient) for every link on its path to the root.
-    pub(crate) rows: Vec<Vec<(u32, f64)>>,
+    /// The transport's exitance state per node (summed up the hierarchy).
+    pub(crate) exitance: Vec<T::Exitance>,
+    /// Total irradiance per node after the last pass's push (what a node's new children inherit).
+    pub(crate) irradiance: Vec<T::Irradiance>,
+    /// Per gather target: every link evaluated there (its own, or an ancestor's that distributes to faces
+    /// or leaves), with the coefficient at the target.
+    pub(crate) rows: Vec<Vec<RowEntry<T::Coefficient>>>,
     /// Nodes whose links changed since the rows were last built (and new nodes).
     pub(crate) dirty: Vec<bool>,
     pub(crate) roots: Vec<u32>,
     /// Per root: whether its initial links as a source exist yet (lazy linking).
     pub(crate) linked: Vec<bool>,
-    pub(crate) kernel: K,
+    /// Per input face: the node that is the whole face (the shallowest node within it), if created.
+    pub(crate) face_nodes: Vec<u32>,
+    pub(crate) kernel: T,
     pub(crate) params: HierarchicalParams,
     pub(crate) min_size: f64,
     // Schedule state.
@@ -51,7 +66,7 @@ pub struct Engine<N, K> {
     pub(crate) stage_changed: bool,
     pub(crate) refine_changed: bool,
     // Solver state.
-    pub(crate) coarse_mu: Option<Vec<Rgb>>,
+    pub(crate) coarse_mu: Option<(Vec<Rgb>, Vec<T::Exitance>)>,
     pub(crate) coarse_denominator: Rgb,
     pub(crate) passes_since_change: u32,
     pub(crate) last_norm: Option<f64>,
@@ -62,12 +77,12 @@ pub struct Engine<N, K> {
     pub(crate) form_factors: u64,
 }
 
-impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
+impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// An engine over the given roots (for patches: one per input face), with no links yet. `min_size` is
     /// the resolved minimum element edge. Leaves start at B = E.
     pub fn new(
         roots: Vec<N>,
-        kernel: K,
+        kernel: T,
         params: HierarchicalParams,
         min_size: f64,
     ) -> Result<Self, SolveError> {
@@ -78,17 +93,19 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
             ));
         }
         let n = roots.len();
-        let radiosity = roots.iter().map(|r| r.emission()).collect();
-        Ok(Self {
-            nodes: roots,
-            parent: vec![NONE; n],
-            children: vec![(0, 0); n],
-            links: vec![Vec::new(); n],
-            radiosity,
-            rows: vec![Vec::new(); n],
-            dirty: vec![true; n],
+        let mut engine = Self {
+            nodes: Vec::with_capacity(n),
+            parent: Vec::with_capacity(n),
+            children: Vec::with_capacity(n),
+            links: Vec::with_capacity(n),
+            radiosity: Vec::with_capacity(n),
+            exitance: Vec::with_capacity(n),
+            irradiance: Vec::with_capacity(n),
+            rows: Vec::with_capacity(n),
+            dirty: Vec::with_capacity(n),
             roots: (0..n as u32).collect(),
             linked: vec![false; n],
+            face_nodes: Vec::new(),
             kernel,
             params,
             min_size,
@@ -104,7 +121,54 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
             converged: false,
             steps: 0,
             form_factors: 0,
-        })
+        };
+        for r in roots {
+            engine.push_node(r, NONE, T::Irradiance::default());
+        }
+        Ok(engine)
+    }
+
+    /// Appends a node that receives irradiance `h` (a root: none; a new child: what its parent had), with
+    /// the radiosity and exitance that irradiance gives it.
+    fn push_node(&mut self, node: N, parent: u32, h: T::Irradiance) {
+        let id = self.nodes.len() as u32;
+        if let Some(f) = node.face()
+            && (parent == NONE || self.nodes[parent as usize].face().is_none())
+        {
+            if self.face_nodes.len() <= f {
+                self.face_nodes.resize(f + 1, NONE);
+            }
+            self.face_nodes[f] = id;
+        }
+        let (b, x) = self.kernel.reflect(&node, &h, true);
+        self.nodes.push(node);
+        self.parent.push(parent);
+        self.children.push((0, 0));
+        self.links.push(Vec::new());
+        self.rows.push(Vec::new());
+        self.dirty.push(true);
+        self.radiosity.push(b);
+        self.exitance.push(x);
+        self.irradiance.push(h);
+    }
+
+    /// The structure, for transports that read a source's contents.
+    pub fn view(&self) -> NodeView<'_, N> {
+        NodeView {
+            nodes: &self.nodes,
+            children: &self.children,
+        }
+    }
+
+    /// The node that is the whole of input face `f` (the shallowest node within it), if the hierarchy has
+    /// one.
+    pub fn face_node(&self, f: FaceId) -> Option<u32> {
+        self.face_nodes.get(f).copied().filter(|&i| i != NONE)
+    }
+
+    /// The transport's exitance state of every node.
+    pub fn exitance(&self) -> &[T::Exitance] {
+        &self.exitance
     }
 
     /// The nodes, by id.
@@ -144,8 +208,8 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
         &self.links[i as usize]
     }
 
-    /// The kernel.
-    pub fn kernel(&self) -> &K {
+    /// The transport.
+    pub fn kernel(&self) -> &T {
         &self.kernel
     }
 
@@ -174,7 +238,8 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
         self.steps
     }
 
-    /// Link transfers computed so far (each kept or discarded link counts once).
+    /// Kernel evaluations so far: each link computed (kept or discarded) counts once, and so does each
+    /// re-evaluation of a link's coefficient at a face or leaf below its receiver.
     pub fn form_factors(&self) -> u64 {
         self.form_factors
     }
@@ -190,13 +255,17 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
             + 4
             + size_of::<(u32, u32)>()
             + size_of::<Vec<Link>>()
-            + size_of::<Vec<(u32, f64)>>()
+            + size_of::<Vec<RowEntry<T::Coefficient>>>()
             + 1
-            + 2 * size_of::<Rgb>();
+            + 2 * size_of::<Rgb>()
+            + size_of::<T::Exitance>()
+            + size_of::<T::Irradiance>();
         let links: usize = self.links.iter().map(|l| l.capacity()).sum();
         let rows: usize = self.rows.iter().map(|r| r.capacity()).sum();
-        (self.nodes.len() * per_node + links * size_of::<Link>() + rows * size_of::<(u32, f64)>())
-            as u64
+        (self.nodes.len() * per_node
+            + self.face_nodes.capacity() * 4
+            + links * size_of::<Link>()
+            + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
     }
 
     /// The memory budget in bytes.
@@ -233,23 +302,34 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
         Ok(())
     }
 
-    /// Creates the children of node `i` (which must be a splittable leaf). Children start with the parent's
-    /// radiosity, so the solution is unchanged by the split.
+    /// Creates the children of node `i` (which must be a splittable leaf). Children receive what their parent
+    /// received (through the transport's push), so the solution is unchanged by the split.
     pub(crate) fn split_node(&mut self, i: u32) {
         debug_assert!(self.is_leaf(i));
         let kids = self.nodes[i as usize].split();
         let first = self.nodes.len() as u32;
-        let b = self.radiosity[i as usize];
+        let h = self.irradiance[i as usize];
         for k in kids {
-            self.nodes.push(k);
-            self.parent.push(i);
-            self.children.push((0, 0));
-            self.links.push(Vec::new());
-            self.rows.push(Vec::new());
-            self.dirty.push(true);
-            self.radiosity.push(b);
+            let hk = self.kernel.push(&self.nodes[i as usize], &k, &h);
+            self.push_node(k, i, hk);
         }
         self.children[i as usize] = (first, self.nodes.len() as u32 - first);
-        self.rows[i as usize] = Vec::new();
+        self.dirty[i as usize] = true;
+    }
+
+    /// Splits every node for which `split` holds, top down, before any link exists: a method whose
+    /// hierarchy above the input faces is built in advance (volume clusters) materialises it this way, so
+    /// that every input face is a node that gathers and sends.
+    pub fn expand(&mut self, split: impl Fn(&N) -> bool) -> Result<(), SolveError> {
+        let mut i = 0;
+        while i < self.nodes.len() {
+            if self.is_leaf(i as u32) && split(&self.nodes[i]) {
+                self.check_budget(0, 8)?;
+                self.split_node(i as u32);
+            }
+            i += 1;
+        }
+        self.operator_changed();
+        Ok(())
     }
 }

@@ -60,31 +60,38 @@
 //!   (refused).
 
 //! ## Extending: other node kinds
-//! The machinery is generic: [`Engine`] refines, gathers and schedules over any [`NodeKind`] (area, bound,
-//! orientation, projected area, reflectance, emission, split) with links computed by any [`Kernel`]. The
-//! patch solver is [`HierarchicalSolver`] = `Engine<Patch, PatchKernel>` plus output; a volume-cluster method
-//! supplies an enum of cluster and [`Patch`] nodes and a kernel for cluster links, and starts the engine with
-//! one root and a self-link ([`Engine::add_link`]).
+//! The machinery is generic: [`Engine`] refines, gathers, pushes, pulls and schedules over any [`NodeKind`]
+//! (area, bound, orientation, projected area, reflectance, emission, split) with light moved by any
+//! [`Transport`]: what a link transfers, where it is evaluated ([`GatherAt`]: at the receiver, at each input
+//! face below it, or at each leaf), how a child inherits its parent's irradiance and how a leaf reflects it,
+//! with the state types (irradiance, exitance) the transport chooses. The patch solver is
+//! [`HierarchicalSolver`] = `Engine<Patch, PatchKernel>` plus the shared output layer ([`SurfaceOutput`]);
+//! radlab-volume-cluster supplies cluster nodes and three cluster transfers, starts the engine from one root
+//! self-link ([`Engine::add_link`]) and reuses the same refinement, gather, schedules and output.
 
+mod gather_rows;
 mod gouraud;
 mod hierarchy;
-mod leaf_gather;
 mod link;
 mod locate;
 mod node;
 mod oracle;
+pub mod output;
 mod params;
 mod push_pull;
 pub mod quadrature;
 mod refine;
 mod schedule;
 mod solver;
+pub mod transport;
 
 pub use hierarchy::Engine;
-pub use link::{Kernel, Link, PatchKernel, link_stream};
+pub use link::{Link, PatchKernel, link_stream, reflect_scalar};
 pub use node::{Bound, LATTICE, MAX_LEVEL, NodeKind, Patch};
 pub use oracle::{Action, decide, estimate, light_weight};
+pub use output::SurfaceOutput;
 pub use params::{
     Gather, HierarchicalParams, Interpolation, MIN_ELEMENT_SIZE_REL, Oracle, Schedule,
 };
 pub use solver::HierarchicalSolver;
+pub use transport::{GatherAt, LinearState, NodeView, Transport};

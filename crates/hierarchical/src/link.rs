@@ -1,4 +1,4 @@
-//! Transport links and the kernel that computes them.
+//! Transport links, and the patch-to-patch transport that computes them.
 //!
 //! A link from source s to receiver r carries the transfer coefficient of the gather H_r += K_rs B_s: for
 //! patches K_rs = V_rs F_rs, with
@@ -23,8 +23,12 @@ use radlab_scene::{
     sampling,
 };
 
+use radlab_scene::Rgb;
+
 use crate::node::{NodeKind, Patch};
+use crate::params::Gather;
 use crate::quadrature::{gauss_legendre, polygon_points};
+use crate::transport::{GatherAt, NodeView, Transport};
 
 /// A transport link, stored with its receiver.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,19 +45,23 @@ pub struct Link {
     pub spread: f32,
     /// Visibility fraction V_rs.
     pub visibility: f32,
+    /// The two ends overlap in space (a self-link, or a cluster and something inside its bound): the link
+    /// carries nothing and must be refined (Sillion 1995).
+    pub overlap: bool,
 }
 
-/// Computes links between nodes of kind `N`: the only place geometry meets light transport.
-pub trait Kernel<N: NodeKind>: Sync {
-    /// Whether two nodes can exchange light at all (a cheap geometric test for the initial links).
-    fn may_interact(&self, recv: &N, src: &N) -> bool;
-    /// The link carrying light from `src` to `recv`, or `None` when nothing is transferred.
-    fn link(&self, recv: &N, recv_id: u32, src: &N, src_id: u32) -> Option<Link>;
-    /// The coefficient of `link` (computed for an ancestor of `leaf`) re-evaluated over `leaf`, keeping the
-    /// link's visibility. The default keeps the link's own coefficient.
-    fn leaf_coefficient(&self, leaf: &N, src: &N, link: &Link) -> f64 {
-        let _ = (leaf, src);
-        link.coefficient
+impl Link {
+    /// A link between overlapping ends: no transfer, and the largest possible estimate for the oracles.
+    pub fn overlapping(source: u32) -> Self {
+        Self {
+            source,
+            coefficient: 0.0,
+            f_recv: f32::INFINITY,
+            f_src: f32::INFINITY,
+            spread: f32::INFINITY,
+            visibility: 1.0,
+            overlap: true,
+        }
     }
 }
 
@@ -63,29 +71,38 @@ pub fn link_stream(a: u64, b: u64) -> u64 {
     sampling::mix64(lo ^ sampling::mix64(hi))
 }
 
-/// The patch-to-patch kernel: receiver quadrature of the point-to-polygon factor times sampled visibility.
+/// The patch-to-patch transport: receiver quadrature of the point-to-polygon factor times sampled visibility;
+/// irradiance gathered per leaf ([`Gather::Leaf`]) or per link and pushed ([`Gather::Link`]).
 #[derive(Debug)]
 pub struct PatchKernel<'a> {
     accel: &'a Accel,
     rule: Vec<(f64, f64)>,
     visibility: VisibilitySampling,
     seed: u64,
+    gather: Gather,
 }
 
 impl<'a> PatchKernel<'a> {
-    /// A kernel with `quadrature` Gauss points per side and the given ray sampling.
+    /// A kernel with `quadrature` Gauss points per side, the given ray sampling and gather.
     pub fn new(
         accel: &'a Accel,
         quadrature: u32,
         visibility: VisibilitySampling,
         seed: u64,
+        gather: Gather,
     ) -> Self {
         Self {
             accel,
             rule: gauss_legendre(quadrature),
             visibility,
             seed,
+            gather,
         }
+    }
+
+    /// The accelerator rays are cast through.
+    pub fn accel(&self) -> &'a Accel {
+        self.accel
     }
 
     /// Mean of the point-to-polygon factor from `recv`'s quadrature points to `src`.
@@ -122,12 +139,14 @@ fn in_front(a: &Patch, b: &Patch) -> bool {
         .any(|v| (*v - a.centroid).dot(a.normal) > tol)
 }
 
-impl Kernel<Patch> for PatchKernel<'_> {
-    fn may_interact(&self, recv: &Patch, src: &Patch) -> bool {
+impl PatchKernel<'_> {
+    /// Whether two patches can exchange light: different faces, each partly in front of the other.
+    pub fn patches_interact(recv: &Patch, src: &Patch) -> bool {
         recv.face != src.face && in_front(recv, src) && in_front(src, recv)
     }
 
-    fn link(&self, recv: &Patch, _recv_id: u32, src: &Patch, src_id: u32) -> Option<Link> {
+    /// The link between two patches: kernel quadrature, both form factors, sampled visibility.
+    pub fn patch_link(&self, recv: &Patch, src: &Patch, src_id: u32) -> Option<Link> {
         if recv.face == src.face {
             return None;
         }
@@ -160,11 +179,79 @@ impl Kernel<Patch> for PatchKernel<'_> {
             f_src: f_sr as f32,
             spread: spread as f32,
             visibility: v as f32,
+            overlap: false,
         })
     }
 
-    fn leaf_coefficient(&self, leaf: &Patch, src: &Patch, link: &Link) -> f64 {
-        link.visibility as f64 * self.kernel_mean(leaf, src)
+    /// The coefficient of a patch link at `target`: the link's own at its receiver, else the kernel
+    /// re-integrated over the target with the link's visibility.
+    pub fn patch_coefficient(
+        &self,
+        target: &Patch,
+        src: &Patch,
+        link: &Link,
+        at_receiver: bool,
+    ) -> f64 {
+        if at_receiver {
+            link.coefficient
+        } else {
+            link.visibility as f64 * self.kernel_mean(target, src)
+        }
+    }
+
+    /// Where a patch link is gathered, by the [`Gather`] parameter.
+    pub fn patch_gather_at(&self) -> GatherAt {
+        match self.gather {
+            Gather::Leaf => GatherAt::Leaves,
+            Gather::Link => GatherAt::Receiver,
+        }
+    }
+}
+
+/// B = E + ρ H for a patch-like node.
+pub fn reflect_scalar(emission: Rgb, reflectance: Rgb, h: Rgb, with_emission: bool) -> Rgb {
+    let e = if with_emission { emission } else { Rgb::ZERO };
+    e + reflectance * h
+}
+
+impl Transport<Patch> for PatchKernel<'_> {
+    type Irradiance = Rgb;
+    type Exitance = ();
+    type Coefficient = f64;
+
+    fn may_interact(&self, recv: &Patch, src: &Patch) -> bool {
+        Self::patches_interact(recv, src)
+    }
+
+    fn link(&self, recv: &Patch, _recv_id: u32, src: &Patch, src_id: u32) -> Option<Link> {
+        self.patch_link(recv, src, src_id)
+    }
+
+    fn gather_at(&self, _recv: &Patch, _src: &Patch) -> GatherAt {
+        self.patch_gather_at()
+    }
+
+    fn coefficient(&self, target: &Patch, src: &Patch, link: &Link, at_receiver: bool) -> f64 {
+        self.patch_coefficient(target, src, link, at_receiver)
+    }
+
+    fn emit(&self, _view: &NodeView<'_, Patch>, b: &[Rgb], _x: &[()], link: &Link) -> Rgb {
+        b[link.source as usize]
+    }
+
+    fn deliver(&self, h: &mut Rgb, c: &f64, flux: Rgb) {
+        *h += *c * flux;
+    }
+
+    fn reflect(&self, leaf: &Patch, h: &Rgb, with_emission: bool) -> (Rgb, ()) {
+        (
+            reflect_scalar(leaf.emission, leaf.reflectance, *h, with_emission),
+            (),
+        )
+    }
+
+    fn uniform_response(&self, leaf: &Patch) -> (Rgb, ()) {
+        (leaf.reflectance, ())
     }
 }
 

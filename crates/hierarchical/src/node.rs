@@ -45,6 +45,11 @@ pub trait NodeKind: Send + Sync + Sized {
     /// An identity that depends only on what the node is, not on when it was created (random streams are
     /// derived from it, so any schedule and thread count draws the same rays for the same pair of nodes).
     fn key(&self) -> u64;
+    /// The quadtree element this node is, if it is one (the output layer locates points and interpolates
+    /// vertices through it).
+    fn patch(&self) -> Option<&Patch> {
+        None
+    }
 }
 
 /// Side of the integer parameter lattice every input face is addressed in.
@@ -216,6 +221,10 @@ impl NodeKind for Patch {
 
     fn face(&self) -> Option<FaceId> {
         Some(self.face)
+    }
+
+    fn patch(&self) -> Option<&Patch> {
+        Some(self)
     }
 
     fn key(&self) -> u64 {

@@ -11,6 +11,11 @@
 //! or the other end if that one has reached the minimum size; both ends are split at once only where both
 //! must be: when each end's own factor alone exceeds the threshold (min(F_rs, F_sr)·w > ε) or the link is a
 //! self-link. A link whose ends are both at the minimum size stays.
+//!
+//! Clusters (Sillion 1995; Smits, Arvo & Greenberg 1994): a link whose ends overlap in space carries nothing
+//! and is always refined — a self-link into all pairs of children, each child's self-link included; another
+//! overlapping pair by splitting its larger end. While a source cluster contains an emitter, the source end is
+//! split, so emitters are reached as surfaces before anything they light is resolved.
 
 use crate::link::{Link, direction};
 use crate::node::NodeKind;
@@ -67,18 +72,36 @@ pub fn decide<N: NodeKind>(
     link: &Link,
     weight: f64,
 ) -> Action {
+    let can_r = recv.can_split(min_size);
+    let can_s = src.can_split(min_size);
+    if link.overlap {
+        return match (self_link, can_r, can_s) {
+            (true, true, _) => Action::SplitBoth,
+            (true, false, _) | (false, false, false) => Action::Keep,
+            (false, true, false) => Action::SplitReceiver,
+            (false, false, true) => Action::SplitSource,
+            (false, true, true) => {
+                if clearly_less(recv.area(), src.area()) {
+                    Action::SplitSource
+                } else {
+                    Action::SplitReceiver
+                }
+            }
+        };
+    }
     let e = estimate(oracle, link, weight);
     if e.is_nan() || e <= epsilon {
         return Action::Keep;
     }
-    let can_r = recv.can_split(min_size);
-    let can_s = src.can_split(min_size);
     if self_link {
         return if can_r {
             Action::SplitBoth
         } else {
             Action::Keep
         };
+    }
+    if can_s && src.face().is_none() && src.emission().max_element() > 0.0 {
+        return Action::SplitSource;
     }
     let w = if oracle == Oracle::F { 1.0 } else { weight };
     let both = oracle != Oracle::Variation && (link.f_recv.min(link.f_src) as f64) * w > epsilon;

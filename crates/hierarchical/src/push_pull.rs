@@ -1,10 +1,12 @@
-//! One solution pass over the hierarchy: gather, push, pull (survey 2.4.2; HSA91):
+//! One solution pass over the hierarchy: gather, push, pull (Hanrahan, Salzman & Aupperle 1991), each step
+//! as the node kind's [`Transport`] defines it:
 //!
-//! - gather: H_r = Σ_{links r←s} K_rs B_s at every node with links (in parallel over receivers);
-//! - push: a leaf's irradiance is the sum of the gathered H over itself and its ancestors, and its radiosity
-//!   B = E + ρ ⊙ H;
+//! - gather: every link's flux J_l = emit(l) is delivered at its gather targets' rows, h_t = Σ c_{t,l} ⊗ J_l
+//!   (for patches H_r = Σ_{links r←s} V F_rs B_s), in parallel over targets;
+//! - push: each node adds what its parent passes down (patches: the parent's irradiance), and a leaf's
+//!   radiosity is B = E + ρ ⊙ H (the transport's reflect);
 //! - pull: an inner node's radiosity is the area mean of its children's, B_p = Σ_c A_c B_c / A_p, so the
-//!   power a node sends is exactly the power of its leaves.
+//!   power a node sends is exactly the power of its leaves; the transport's exitance state adds up.
 //!
 //! This is one Jacobi sweep B ← E + M B of the hierarchical operator M = ρ ⊙ push ∘ gather ∘ pull. Close to
 //! ρ = 1 a sweep shrinks the error's slowest mode (nearly uniform over the scene) only by about ρ, so each pass
@@ -20,79 +22,83 @@ use radlab_scene::{Rgb, SolveError};
 use rayon::prelude::*;
 
 use crate::hierarchy::{Engine, NONE};
-use crate::link::Kernel;
 use crate::node::NodeKind;
-use crate::params::Gather;
+use crate::transport::{LinearState, Transport};
 
-impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
-    /// Applies M (and adds E when `with_emission`) to a per-node radiosity `b` whose inner nodes hold the area
-    /// means of their children. Returns the new per-node radiosity, inner nodes pulled.
-    pub(crate) fn apply(&self, b: &[Rgb], with_emission: bool) -> Vec<Rgb> {
-        if self.params.gather == Gather::Leaf {
-            let mut out: Vec<Rgb> = self
-                .rows
-                .par_iter()
-                .enumerate()
-                .map(|(i, row)| {
-                    if self.children[i].1 != 0 {
-                        return Rgb::ZERO;
-                    }
-                    let mut h = Rgb::ZERO;
-                    for &(s, c) in row {
-                        h += c * b[s as usize];
-                    }
-                    let node = &self.nodes[i];
-                    let e = if with_emission {
-                        node.emission()
-                    } else {
-                        Rgb::ZERO
-                    };
-                    e + node.reflectance() * h
-                })
-                .collect();
-            self.pull(&mut out);
-            return out;
-        }
-        // Gather.
-        let gathered: Vec<Rgb> = self
+/// A per-node state of the solution: radiosity (area mean) and the transport's exitance.
+pub(crate) type Field<X> = (Vec<Rgb>, Vec<X>);
+
+impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
+    /// Applies M (and adds E when `with_emission`) to a per-node radiosity `b` and exitance `x` whose inner
+    /// nodes hold the pulled values of their children. Returns the new radiosity and exitance, inner nodes
+    /// pulled, and every node's total irradiance after push.
+    pub(crate) fn apply(
+        &self,
+        b: &[Rgb],
+        x: &[T::Exitance],
+        with_emission: bool,
+    ) -> (Field<T::Exitance>, Vec<T::Irradiance>) {
+        let view = self.view();
+        // What each link sends.
+        let flux: Vec<Vec<Rgb>> = self
             .links
             .par_iter()
             .map(|ls| {
-                let mut h = Rgb::ZERO;
-                for l in ls {
-                    h += l.coefficient * b[l.source as usize];
+                ls.iter()
+                    .map(|l| {
+                        if l.overlap {
+                            Rgb::ZERO
+                        } else {
+                            self.kernel.emit(&view, b, x, l)
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        // Gather at every target.
+        let mut h: Vec<T::Irradiance> = self
+            .rows
+            .par_iter()
+            .map(|row| {
+                let mut h = T::Irradiance::default();
+                for (r, k, c) in row {
+                    self.kernel
+                        .deliver(&mut h, c, flux[*r as usize][*k as usize]);
                 }
                 h
             })
             .collect();
         // Push: parents precede children in id order.
-        let n = self.nodes.len();
-        let mut acc = gathered;
-        for i in 0..n {
+        for i in 0..self.nodes.len() {
             let p = self.parent[i];
             if p != NONE {
-                let up = acc[p as usize];
-                acc[i] += up;
+                let down =
+                    self.kernel
+                        .push(&self.nodes[p as usize], &self.nodes[i], &h[p as usize]);
+                h[i].add_scaled(Rgb::ONE, &down);
             }
         }
-        let mut out = vec![Rgb::ZERO; n];
-        for i in 0..n {
-            if self.children[i].1 == 0 {
-                let node = &self.nodes[i];
-                let e = if with_emission {
-                    node.emission()
+        // Reflect at leaves.
+        let (mut out_b, mut out_x): (Vec<Rgb>, Vec<T::Exitance>) = self
+            .nodes
+            .par_iter()
+            .zip(&self.children)
+            .zip(&h)
+            .map(|((node, c), h)| {
+                if c.1 == 0 {
+                    self.kernel.reflect(node, h, with_emission)
                 } else {
-                    Rgb::ZERO
-                };
-                out[i] = e + node.reflectance() * acc[i];
-            }
-        }
-        self.pull(&mut out);
-        out
+                    (Rgb::ZERO, T::Exitance::default())
+                }
+            })
+            .unzip();
+        self.pull(&mut out_b, &mut out_x);
+        ((out_b, out_x), h)
     }
 
-    /// Sets every inner node to the area mean of its children (children follow parents in id order).
-    pub(crate) fn pull(&self, b: &mut [Rgb]) {
+    /// Sets every inner node to the area mean of its children's radiosity and the sum of their exitance
+    /// (children follow parents in id order).
+    pub(crate) fn pull(&self, b: &mut [Rgb], x: &mut [T::Exitance]) {
         for i in (0..self.nodes.len()).rev() {
             let (first, count) = self.children[i];
             if count == 0 {
@@ -100,12 +106,15 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
             }
             let mut sum = Rgb::ZERO;
             let mut area = 0.0;
+            let mut xs = T::Exitance::default();
             for c in first..first + count {
                 let a = self.nodes[c as usize].area();
                 sum += a * b[c as usize];
                 area += a;
+                xs.add_scaled(Rgb::ONE, &x[c as usize]);
             }
             b[i] = if area > 0.0 { sum / area } else { Rgb::ZERO };
+            x[i] = xs;
         }
     }
 
@@ -123,27 +132,28 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
     /// One gather/push-pull pass with the coarse correction. Returns the estimated remaining relative error
     /// (infinite until two passes have run on the current links).
     pub(crate) fn solve_pass(&mut self) -> Result<f64, SolveError> {
-        if self.params.gather == Gather::Leaf && self.dirty.iter().any(|&d| d) {
+        if self.dirty.iter().any(|&d| d) {
             self.rebuild_rows();
         }
         if self.coarse_mu.is_none() {
-            let mut u: Vec<Rgb> = (0..self.nodes.len())
+            // The furnace mode: every leaf's response to a unit irradiance from all around.
+            let (mut u, mut ux): (Vec<Rgb>, Vec<T::Exitance>) = (0..self.nodes.len())
                 .map(|i| {
                     if self.children[i].1 == 0 {
-                        self.nodes[i].reflectance()
+                        self.kernel.uniform_response(&self.nodes[i])
                     } else {
-                        Rgb::ZERO
+                        (Rgb::ZERO, T::Exitance::default())
                     }
                 })
-                .collect();
-            self.pull(&mut u);
-            let mu = self.apply(&u, false);
+                .unzip();
+            self.pull(&mut u, &mut ux);
+            let ((mu, mux), _) = self.apply(&u, &ux, false);
             let denom = self.leaf_sum(&u) - self.leaf_sum(&mu);
-            self.coarse_mu = Some(mu);
+            self.coarse_mu = Some((mu, mux));
             self.coarse_denominator = denom;
         }
         let b = std::mem::take(&mut self.radiosity);
-        let mut next = self.apply(&b, true);
+        let ((mut next, mut next_x), h) = self.apply(&b, &self.exitance, true);
         let residual = self.leaf_sum(&next) - self.leaf_sum(&b);
         let denom = self.coarse_denominator;
         let scale = self
@@ -158,11 +168,14 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
                 c[k] = residual[k] / denom[k];
             }
         }
-        if let Some(mu) = &self.coarse_mu
+        if let Some((mu, mux)) = &self.coarse_mu
             && c != Rgb::ZERO
         {
             for (x, m) in next.iter_mut().zip(mu) {
                 *x += c * *m;
+            }
+            for (x, m) in next_x.iter_mut().zip(mux) {
+                x.add_scaled(c, m);
             }
         }
         // Size of the pass.
@@ -180,11 +193,13 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
             return Err(SolveError::Numerical(
                 "the hierarchical solution became non-finite: the discrete operator's gain exceeds one \
                  (with gather=link close to rho = 1 the per-link means overestimate form-factor sums; \
-                 use gather=leaf)"
+                 use gather=leaf; with clusters, lower epsilon)"
                     .into(),
             ));
         }
         self.radiosity = next;
+        self.exitance = next_x;
+        self.irradiance = h;
         let step = if norm > 0.0 { diff / norm } else { 0.0 };
         self.passes_since_change += 1;
         let estimate = match self.last_norm {

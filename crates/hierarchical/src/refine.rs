@@ -15,11 +15,12 @@ use radlab_scene::SolveError;
 use rayon::prelude::*;
 
 use crate::hierarchy::Engine;
-use crate::link::{Kernel, Link};
+use crate::link::Link;
 use crate::node::NodeKind;
 use crate::oracle::{Action, decide, light_weight};
+use crate::transport::Transport;
 
-impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
+impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Whether root `r` carries light now (emits, or has received some).
     pub(crate) fn root_is_lit(&self, r: u32) -> bool {
         self.radiosity[r as usize].max_element() > 0.0
@@ -90,8 +91,8 @@ impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
         Ok(count)
     }
 
-    /// Adds the link `recv ← src` computed by the kernel (a volume-cluster method starts from its root's
-    /// self-link). Returns whether a link was made (the kernel may find nothing to transfer).
+    /// Adds the link `recv ← src` computed by the transport (a volume-cluster method starts from its root's
+    /// self-link). Returns whether a link was made (the transport may find nothing to transfer).
     pub fn add_link(&mut self, recv: u32, src: u32) -> Result<bool, SolveError> {
         let n = self.nodes.len() as u32;
         if recv >= n || src >= n {

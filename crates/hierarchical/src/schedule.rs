@@ -15,11 +15,11 @@
 use radlab_scene::{SolveError, Step};
 
 use crate::hierarchy::{Engine, Phase};
-use crate::link::Kernel;
 use crate::node::NodeKind;
 use crate::params::Schedule;
+use crate::transport::Transport;
 
-impl<N: NodeKind, K: Kernel<N>> Engine<N, K> {
+impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The threshold of the current stage.
     pub fn current_epsilon(&self) -> f64 {
         match self.params.schedule {

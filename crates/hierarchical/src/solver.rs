@@ -5,14 +5,12 @@
 use radlab_scene::{
     Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
 };
-use rayon::prelude::*;
 
-use crate::gouraud::{face_corner_values, interpolate};
 use crate::hierarchy::Engine;
 use crate::link::PatchKernel;
-use crate::locate::{insideness, param_coords, param_corners};
 use crate::node::Patch;
-use crate::params::{HierarchicalParams, Interpolation, MIN_ELEMENT_SIZE_REL};
+use crate::output::{SurfaceOutput, locate};
+use crate::params::{HierarchicalParams, MIN_ELEMENT_SIZE_REL};
 
 /// Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991) over a scene; see the crate documentation.
 #[derive(Debug)]
@@ -20,7 +18,7 @@ pub struct HierarchicalSolver<'a> {
     scene: &'a Scene,
     accel: &'a Accel,
     engine: Engine<Patch, PatchKernel<'a>>,
-    corner_values: Vec<[Rgb; 4]>,
+    output: SurfaceOutput,
     rays: u64,
 }
 
@@ -46,13 +44,20 @@ impl<'a> HierarchicalSolver<'a> {
         let roots = (0..scene.face_count())
             .map(|f| Patch::root(scene, f))
             .collect();
-        let kernel = PatchKernel::new(accel, params.quadrature, params.visibility, seed);
+        let kernel = PatchKernel::new(
+            accel,
+            params.quadrature,
+            params.visibility,
+            seed,
+            params.gather,
+        );
+        let output = SurfaceOutput::new(params.interpolation);
         let engine = Engine::new(roots, kernel, params, min_size)?;
         Ok(Self {
             scene,
             accel,
             engine,
-            corner_values: Vec::new(),
+            output,
             rays: 0,
         })
     }
@@ -80,61 +85,14 @@ impl<'a> HierarchicalSolver<'a> {
     }
 
     /// The leaf of `face` containing `point` (the nearest one for points slightly outside).
-    pub fn locate(&self, face: FaceId, point: glam::DVec3) -> u32 {
-        let e = &self.engine;
-        let mut i = e.roots()[face];
-        let q = param_coords(&e.nodes()[i as usize].polygon, point);
-        while !e.is_leaf(i) {
-            let mut best = (f64::NEG_INFINITY, i);
-            for c in e.children(i) {
-                let (corners, n) = param_corners(&e.nodes()[c as usize]);
-                let d = insideness(&corners[..n], q);
-                if d > best.0 {
-                    best = (d, c);
-                }
-            }
-            i = best.1;
-        }
-        i
-    }
-
-    fn update_output(&mut self) {
-        if self.engine.params().interpolation != Interpolation::Gouraud {
-            return;
-        }
-        let e = &self.engine;
-        let per_face: Vec<Vec<(u32, [Rgb; 4])>> = e
-            .roots()
-            .par_iter()
-            .map(|&r| face_corner_values(e, r))
-            .collect();
-        let mut values = vec![[Rgb::ZERO; 4]; e.nodes().len()];
-        for list in per_face {
-            for (i, v) in list {
-                values[i as usize] = v;
-            }
-        }
-        self.corner_values = values;
+    pub fn locate(&self, face: FaceId, point: glam::DVec3) -> Option<u32> {
+        locate(&self.engine, face, point)
     }
 }
 
 impl Solution for HierarchicalSolver<'_> {
     fn radiosity_at(&self, face: FaceId, point: glam::DVec3) -> Rgb {
-        if face >= self.scene.face_count() {
-            return Rgb::ZERO;
-        }
-        let i = self.locate(face, point);
-        let e = &self.engine;
-        match e.params().interpolation {
-            Interpolation::Gouraud if self.corner_values.len() > i as usize => {
-                let node = &e.nodes()[i as usize];
-                let root = &e.nodes()[e.roots()[face] as usize];
-                let (corners, n) = param_corners(node);
-                let q = param_coords(&root.polygon, point);
-                interpolate(&corners[..n], &self.corner_values[i as usize], q)
-            }
-            _ => e.radiosity()[i as usize],
-        }
+        self.output.radiosity_at(&self.engine, face, point)
     }
 }
 
@@ -144,7 +102,7 @@ impl Solver for HierarchicalSolver<'_> {
         let s = self.engine.step();
         self.rays += self.accel.rays_cast().saturating_sub(before);
         let s = s?;
-        self.update_output();
+        self.output.update(&self.engine, self.scene.face_count());
         Ok(s)
     }
 
@@ -160,7 +118,7 @@ impl Solver for HierarchicalSolver<'_> {
             links: e.link_count() as u64,
             form_factors: e.form_factors(),
             rays: self.rays,
-            bytes: e.bytes() + (self.corner_values.len() * size_of::<[Rgb; 4]>()) as u64,
+            bytes: e.bytes() + self.output.bytes(),
             residual: e.residual(),
         }
     }
