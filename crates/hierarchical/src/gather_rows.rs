@@ -12,7 +12,7 @@
 //!
 //! Every evaluation below the receiver is a kernel evaluation and is counted in the engine's form factors, so a
 //! gather that re-evaluates links pays for it in the statistics. Rows are rebuilt only for targets below a
-//! node whose links changed.
+//! node whose links changed, and only the entries of the changed nodes' links are evaluated again.
 
 use rayon::prelude::*;
 
@@ -28,33 +28,49 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             && (p == NONE || self.nodes[p as usize].face().is_none())
     }
 
-    /// The row of target `t`: its own links, and the links of its ancestors that distribute to it. Returns
-    /// the row and the number of kernel evaluations it took.
-    fn build_row(&self, t: u32, distributes: &[bool]) -> (Vec<RowEntry<T::Coefficient>>, u64) {
+    /// The row of target `t`: its own links, and the links of its ancestors that distribute to it. Entries
+    /// of ancestors whose links have not changed are kept from `old` (the row as last built, valid unless `t`
+    /// itself changed); the rest are evaluated. Returns the row and the number of kernel evaluations it took.
+    fn build_row(
+        &self,
+        t: u32,
+        old: &[RowEntry<T::Coefficient>],
+        distributes: &[bool],
+    ) -> (Vec<RowEntry<T::Coefficient>>, u64) {
         let node = &self.nodes[t as usize];
         let leaf = self.children[t as usize].1 == 0;
         let within_face = node.face().is_some();
-        let mut row = Vec::new();
+        let renew = self.dirty[t as usize];
+        let mut row: Vec<RowEntry<T::Coefficient>> = if renew {
+            Vec::new()
+        } else {
+            old.iter()
+                .filter(|(r, _, _)| !self.dirty[*r as usize])
+                .copied()
+                .collect()
+        };
         let mut evaluations = 0;
-        for (k, l) in self.links[t as usize].iter().enumerate() {
-            if l.overlap {
-                continue;
-            }
-            let src = &self.nodes[l.source as usize];
-            let here = match self.kernel.gather_at(node, src) {
-                GatherAt::Receiver => true,
-                GatherAt::Faces => within_face,
-                GatherAt::Leaves => leaf,
-            };
-            if here {
-                row.push((t, k as u32, self.kernel.coefficient(node, src, l, true)));
+        if renew {
+            for (k, l) in self.links[t as usize].iter().enumerate() {
+                if l.overlap {
+                    continue;
+                }
+                let src = &self.nodes[l.source as usize];
+                let here = match self.kernel.gather_at(node, src) {
+                    GatherAt::Receiver => true,
+                    GatherAt::Faces => within_face,
+                    GatherAt::Leaves => leaf,
+                };
+                if here {
+                    row.push((t, k as u32, self.kernel.coefficient(node, src, l, true)));
+                }
             }
         }
         let face_target = self.is_face_target(t);
         if leaf || face_target {
             let mut a = self.parent[t as usize];
             while a != NONE {
-                if distributes[a as usize] {
+                if distributes[a as usize] && (renew || self.dirty[a as usize]) {
                     let recv = &self.nodes[a as usize];
                     for (k, l) in self.links[a as usize].iter().enumerate() {
                         if l.overlap {
@@ -75,6 +91,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 a = self.parent[a as usize];
             }
         }
+        // A fixed order whatever was kept: by receiver, then link.
+        row.sort_unstable_by_key(|(r, k, _)| (*r, *k));
         row.shrink_to_fit();
         (row, evaluations)
     }
@@ -106,7 +124,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let todo: Vec<u32> = (0..n as u32).filter(|&i| stale[i as usize]).collect();
         let built: Vec<(Vec<RowEntry<T::Coefficient>>, u64)> = todo
             .par_iter()
-            .map(|&t| self.build_row(t, &distributes))
+            .map(|&t| self.build_row(t, &self.rows[t as usize], &distributes))
             .collect();
         for (t, (row, evaluations)) in todo.into_iter().zip(built) {
             self.rows[t as usize] = row;

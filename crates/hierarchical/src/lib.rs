@@ -14,6 +14,7 @@
 //! |---|---|---|
 //! | `epsilon` | 0.01 | refinement threshold on the oracle's estimate (dimensionless) |
 //! | `oracle` | `variation` | `f` (max(F_rs, F_sr)), `bf` (ρ_r B_s/B̄ × that, B̄ the area-mean radiosity), `variation` (spread of kernel samples × ρ_r B_s/B̄) |
+//! | `error_norm` | `radiosity` | `radiosity` (the estimate as is) or `power` (× A_r / A_scene: the power a link brings) |
 //! | `schedule` | `scheduled` | `two-stage`, `interleaved`, `scheduled` (survey 2.4.3) |
 //! | `alpha` | 2 | scheduled: ε_{i+1} = ε_i/α, from ε·α^(stages−1) down to ε |
 //! | `stages` | 3 | scheduled: stages over which ε falls |
@@ -91,7 +92,7 @@ pub use node::{Bound, LATTICE, MAX_LEVEL, NodeKind, Patch};
 pub use oracle::{Action, decide, estimate, light_weight};
 pub use output::SurfaceOutput;
 pub use params::{
-    Gather, HierarchicalParams, Interpolation, MIN_ELEMENT_SIZE_REL, Oracle, Schedule,
+    ErrorNorm, Gather, HierarchicalParams, Interpolation, MIN_ELEMENT_SIZE_REL, Oracle, Schedule,
 };
 pub use solver::HierarchicalSolver;
 pub use transport::{GatherAt, LinearState, NodeView, Transport};

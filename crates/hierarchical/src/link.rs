@@ -48,6 +48,9 @@ pub struct Link {
     /// The two ends overlap in space (a self-link, or a cluster and something inside its bound): the link
     /// carries nothing and must be refined (Sillion 1995).
     pub overlap: bool,
+    /// A point-approximated transfer between node centroids (a cluster link), not a kernel quadrature;
+    /// `coefficient` then holds V/(π r²).
+    pub clustered: bool,
 }
 
 impl Link {
@@ -61,6 +64,7 @@ impl Link {
             spread: f32::INFINITY,
             visibility: 1.0,
             overlap: true,
+            clustered: true,
         }
     }
 }
@@ -180,6 +184,7 @@ impl PatchKernel<'_> {
             spread: spread as f32,
             visibility: v as f32,
             overlap: false,
+            clustered: false,
         })
     }
 
@@ -235,7 +240,14 @@ impl Transport<Patch> for PatchKernel<'_> {
         self.patch_coefficient(target, src, link, at_receiver)
     }
 
-    fn emit(&self, _view: &NodeView<'_, Patch>, b: &[Rgb], _x: &[()], link: &Link) -> Rgb {
+    fn emit(
+        &self,
+        _view: &NodeView<'_, Patch>,
+        b: &[Rgb],
+        _x: &[()],
+        _recv: u32,
+        link: &Link,
+    ) -> Rgb {
         b[link.source as usize]
     }
 

@@ -60,7 +60,8 @@ pub fn estimate(oracle: Oracle, link: &Link, weight: f64) -> f64 {
     }
 }
 
-/// Decides the fate of link `recv ← src`.
+/// Decides the fate of link `recv ← src`. `norm` multiplies the estimate: 1 for the radiosity norm,
+/// A_r / A_scene for the power norm ([`crate::ErrorNorm`]).
 #[allow(clippy::too_many_arguments)]
 pub fn decide<N: NodeKind>(
     oracle: Oracle,
@@ -71,6 +72,7 @@ pub fn decide<N: NodeKind>(
     self_link: bool,
     link: &Link,
     weight: f64,
+    norm: f64,
 ) -> Action {
     let can_r = recv.can_split(min_size);
     let can_s = src.can_split(min_size);
@@ -89,7 +91,7 @@ pub fn decide<N: NodeKind>(
             }
         };
     }
-    let e = estimate(oracle, link, weight);
+    let e = estimate(oracle, link, weight) * norm;
     if e.is_nan() || e <= epsilon {
         return Action::Keep;
     }
@@ -104,7 +106,8 @@ pub fn decide<N: NodeKind>(
         return Action::SplitSource;
     }
     let w = if oracle == Oracle::F { 1.0 } else { weight };
-    let both = oracle != Oracle::Variation && (link.f_recv.min(link.f_src) as f64) * w > epsilon;
+    let both =
+        oracle != Oracle::Variation && (link.f_recv.min(link.f_src) as f64) * w * norm > epsilon;
     if both && can_r && can_s {
         return Action::SplitBoth;
     }

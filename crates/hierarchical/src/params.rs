@@ -60,6 +60,21 @@ pub enum Gather {
     Link,
 }
 
+/// What the refinement threshold ε bounds (RenderPark's "error norm"; Smits, Arvo & Greenberg 1994 bound the
+/// power a link carries).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErrorNorm {
+    /// The oracle's estimate as is: the irradiance a link brings its receiver, relative to the scene's mean
+    /// (HSA91). Every receiver, however small, gets links accurate to ε of its own light.
+    #[default]
+    Radiosity,
+    /// The estimate times A_r / A_scene: the power a link brings its receiver, relative to the scene's.
+    /// Small receivers accept coarser links, so the number of links depends on ε and the lighting, not on how
+    /// finely the surfaces are tessellated.
+    Power,
+}
+
 /// How [`radlab_scene::Solution::radiosity_at`] reconstructs radiosity inside an input face.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -81,6 +96,8 @@ pub struct HierarchicalParams {
     pub epsilon: f64,
     /// Refinement oracle. Default [`Oracle::Variation`].
     pub oracle: Oracle,
+    /// What ε bounds. Default [`ErrorNorm::Radiosity`].
+    pub error_norm: ErrorNorm,
     /// Schedule. Default [`Schedule::Scheduled`].
     pub schedule: Schedule,
     /// Scheduled only: ε is divided by α between stages (α ≥ 1; 1 simulates successive bounces). Default 2.
@@ -118,6 +135,7 @@ impl HierarchicalParams {
         Self {
             epsilon: 0.01,
             oracle: Oracle::Variation,
+            error_norm: ErrorNorm::Radiosity,
             schedule: Schedule::Scheduled,
             alpha: 2.0,
             stages: 3,
@@ -175,6 +193,11 @@ impl MethodParams for HierarchicalParams {
             (
                 "oracle",
                 "f (form factor) | bf (radiosity x form factor) | variation (spread of kernel samples, default)",
+            ),
+            (
+                "error_norm",
+                "radiosity (irradiance a link brings, relative to the mean; hierarchical's default) | power (times \
+                 receiver area over scene area; volume-cluster's default)",
             ),
             (
                 "schedule",

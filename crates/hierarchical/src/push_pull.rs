@@ -43,13 +43,14 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let flux: Vec<Vec<Rgb>> = self
             .links
             .par_iter()
-            .map(|ls| {
+            .enumerate()
+            .map(|(r, ls)| {
                 ls.iter()
                     .map(|l| {
                         if l.overlap {
                             Rgb::ZERO
                         } else {
-                            self.kernel.emit(&view, b, x, l)
+                            self.kernel.emit(&view, b, x, r as u32, l)
                         }
                     })
                     .collect()

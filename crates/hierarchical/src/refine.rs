@@ -18,6 +18,7 @@ use crate::hierarchy::Engine;
 use crate::link::Link;
 use crate::node::NodeKind;
 use crate::oracle::{Action, decide, light_weight};
+use crate::params::ErrorNorm;
 use crate::transport::Transport;
 
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
@@ -153,6 +154,12 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let oracle = self.params.oracle;
         let min_size = self.min_size;
         let scale = self.radiosity_scale();
+        let total_area: f64 = self
+            .roots
+            .iter()
+            .map(|&r| self.nodes[r as usize].area())
+            .sum();
+        let power_norm = self.params.error_norm == ErrorNorm::Power && total_area > 0.0;
         let decisions: Vec<Vec<Action>> = self
             .links
             .par_iter()
@@ -176,6 +183,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                             r as u32 == l.source,
                             l,
                             w,
+                            if power_norm {
+                                recv.area() / total_area
+                            } else {
+                                1.0
+                            },
                         )
                     })
                     .collect()

@@ -99,9 +99,17 @@ pub trait Transport<N: NodeKind>: Sync {
     fn coefficient(&self, target: &N, src: &N, link: &Link, at_receiver: bool)
     -> Self::Coefficient;
 
-    /// What the source sends along `link` this pass, from the per-node radiosity `b` and exitance `x` (indexed
-    /// by node id) and the hierarchy `view` (for sources that read their contents).
-    fn emit(&self, view: &NodeView<'_, N>, b: &[Rgb], x: &[Self::Exitance], link: &Link) -> Rgb;
+    /// What the source sends along `link` (stored with receiver `recv`) this pass, from the per-node radiosity
+    /// `b` and exitance `x` (indexed by node id) and the hierarchy `view` (for sources that read their
+    /// contents).
+    fn emit(
+        &self,
+        view: &NodeView<'_, N>,
+        b: &[Rgb],
+        x: &[Self::Exitance],
+        recv: u32,
+        link: &Link,
+    ) -> Rgb;
 
     /// Adds to `h` what a target with coefficient `c` receives from a link sending `flux`.
     fn deliver(&self, h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Rgb);

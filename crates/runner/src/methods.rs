@@ -88,6 +88,14 @@ pub fn methods() -> Vec<MethodInfo> {
             radlab_hierarchical::HierarchicalSolver
         ),
         method!(
+            "volume-cluster",
+            "Volume-clustered hierarchical radiosity (Smits, Arvo & Greenberg 1994; Sillion 1995): a loose octree of \
+             clusters above the input faces, one root self-link refined by the hierarchical oracles; transfer = \
+             isotropic | alpha | directional. No k^2 initial links: for scenes with many input faces.",
+            radlab_volume_cluster::VolumeClusterParams,
+            radlab_volume_cluster::VolumeClusterSolver
+        ),
+        method!(
             "mc-radiosity",
             "Mesh-based Monte Carlo radiosity: particles shot from the emitters and deposited on a fixed element \
              mesh, a batch per step; error falls as N^(-1/2). The Monte Carlo counterpart of matrix and progressive.",

@@ -1,0 +1,216 @@
+//! The transport of volume-clustered hierarchical radiosity: patch–patch links exactly as plain hierarchical
+//! radiosity computes them (receiver quadrature of the point-to-polygon factor × sampled visibility, gathered
+//! per leaf), and links with a cluster end as point approximations ([`crate::cluster_link`]) whose source side
+//! and receiver side are what distinguishes the three transfer modes ([`TransferMode`]: isotropic, α,
+//! directional). For a cluster link with visibility V, unit direction d from source to receiver centroid and
+//! distance r, a receiving point of normal n gets
+//!
+//!   H = V J_S(d) max(0, n·(−d)) / (π r²),
+//!
+//! where J_S(d) = A_s max(0, n_s·d) B_s for a patch source, and for a cluster source the mode's estimate of
+//! Σ_i A_i max(0, n_i·d) B_i. A patch receiver takes this at its centroid and pushes it to its pieces
+//! unchanged: a link above the input-face level is never re-evaluated per leaf.
+
+use std::fmt::Debug;
+
+use glam::DVec3;
+use radlab_hierarchical::{
+    GatherAt, LinearState, Link, NodeKind, NodeView, PatchKernel, Transport,
+};
+use radlab_scene::{Accel, Rgb, form_factor::VisibilitySampling};
+
+use crate::cluster_link::{centroid_geometry, cluster_link};
+use crate::cluster_node::ClusterNode;
+
+/// What a transfer mode decides: where a cluster receiver's links are evaluated, what a cluster source sends,
+/// and how irradiance moves below a cluster.
+pub trait TransferMode: Sync + Send + Debug + Default {
+    /// Irradiance state of a node.
+    type Irradiance: LinearState;
+    /// Exitance state besides radiosity.
+    type Exitance: LinearState;
+    /// A link's coefficient at a gather target.
+    type Coefficient: Copy + Send + Sync + Debug;
+    /// Where links to a cluster receiver are evaluated.
+    const AT_CLUSTER: GatherAt;
+    /// A scalar coefficient (irradiance per unit flux) at a patch target.
+    fn scalar(c: f64) -> Self::Coefficient;
+    /// The coefficient at a cluster receiver: link coefficient `g` = V/(π r²), direction `d` source → receiver.
+    fn at_cluster(g: f64, d: DVec3) -> Self::Coefficient;
+    /// J_S(d) of cluster `src`.
+    fn cluster_flux(
+        view: &NodeView<'_, ClusterNode<'_>>,
+        b: &[Rgb],
+        x: &[Self::Exitance],
+        src: u32,
+        d: DVec3,
+    ) -> Rgb;
+    /// h += c ⊗ flux.
+    fn deliver(h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Rgb);
+    /// What a child receives of its parent's irradiance.
+    fn push(
+        parent: &ClusterNode<'_>,
+        child: &ClusterNode<'_>,
+        h: &Self::Irradiance,
+    ) -> Self::Irradiance;
+    /// Radiosity and exitance of a leaf patch from its irradiance (E included when `with_emission`).
+    fn reflect(
+        leaf: &ClusterNode<'_>,
+        h: &Self::Irradiance,
+        with_emission: bool,
+    ) -> (Rgb, Self::Exitance);
+    /// A leaf's radiosity and exitance under unit irradiance, without emission (B = ρ).
+    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, Self::Exitance);
+}
+
+/// The transport, generic over the transfer mode.
+#[derive(Debug)]
+pub struct ClusterTransport<'a, M> {
+    patches: PatchKernel<'a>,
+    accel: &'a Accel,
+    visibility: VisibilitySampling,
+    seed: u64,
+    mode: M,
+}
+
+impl<'a, M: TransferMode> ClusterTransport<'a, M> {
+    /// A transport whose patch links use `patches` and whose cluster links cast `visibility` rays.
+    pub fn new(
+        patches: PatchKernel<'a>,
+        accel: &'a Accel,
+        visibility: VisibilitySampling,
+        seed: u64,
+    ) -> Self {
+        Self {
+            patches,
+            accel,
+            visibility,
+            seed,
+            mode: M::default(),
+        }
+    }
+
+    /// The transfer mode.
+    pub fn mode(&self) -> &M {
+        &self.mode
+    }
+}
+
+impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M> {
+    type Irradiance = M::Irradiance;
+    type Exitance = M::Exitance;
+    type Coefficient = M::Coefficient;
+
+    fn may_interact(&self, _recv: &ClusterNode<'a>, _src: &ClusterNode<'a>) -> bool {
+        true
+    }
+
+    fn link(
+        &self,
+        recv: &ClusterNode<'a>,
+        recv_id: u32,
+        src: &ClusterNode<'a>,
+        src_id: u32,
+    ) -> Option<Link> {
+        match (recv, src) {
+            (ClusterNode::Patch(r), ClusterNode::Patch(s)) => self.patches.patch_link(r, s, src_id),
+            _ => cluster_link(
+                self.accel,
+                self.visibility,
+                self.seed,
+                recv,
+                recv_id,
+                src,
+                src_id,
+            ),
+        }
+    }
+
+    fn gather_at(&self, recv: &ClusterNode<'a>, src: &ClusterNode<'a>) -> GatherAt {
+        match (recv, src) {
+            (ClusterNode::Patch(_), ClusterNode::Patch(_)) => self.patches.patch_gather_at(),
+            (ClusterNode::Cluster(_), _) => M::AT_CLUSTER,
+            (ClusterNode::Patch(_), ClusterNode::Cluster(_)) => GatherAt::Receiver,
+        }
+    }
+
+    fn coefficient(
+        &self,
+        target: &ClusterNode<'a>,
+        src: &ClusterNode<'a>,
+        link: &Link,
+        at_receiver: bool,
+    ) -> M::Coefficient {
+        if !link.clustered
+            && let (ClusterNode::Patch(t), ClusterNode::Patch(s)) = (target, src)
+        {
+            return M::scalar(self.patches.patch_coefficient(t, s, link, at_receiver));
+        }
+        let (d, r2) = centroid_geometry(target.centroid(), src.centroid());
+        match target {
+            ClusterNode::Cluster(_) => M::at_cluster(link.coefficient, d),
+            ClusterNode::Patch(p) => {
+                // At the receiver the link's own distance; at a face below a cluster, the face's own.
+                let g = if at_receiver {
+                    link.coefficient
+                } else {
+                    link.visibility as f64 / (std::f64::consts::PI * r2)
+                };
+                M::scalar(g * p.normal.dot(-d).max(0.0))
+            }
+        }
+    }
+
+    fn emit(
+        &self,
+        view: &NodeView<'_, ClusterNode<'a>>,
+        b: &[Rgb],
+        x: &[M::Exitance],
+        recv: u32,
+        link: &Link,
+    ) -> Rgb {
+        let s = link.source as usize;
+        if !link.clustered {
+            return b[s];
+        }
+        let (d, _) = centroid_geometry(
+            view.nodes[recv as usize].centroid(),
+            view.nodes[s].centroid(),
+        );
+        match &view.nodes[s] {
+            ClusterNode::Patch(p) => b[s] * (p.area * p.normal.dot(d).max(0.0)),
+            ClusterNode::Cluster(_) => M::cluster_flux(view, b, x, link.source, d),
+        }
+    }
+
+    fn deliver(&self, h: &mut M::Irradiance, c: &M::Coefficient, flux: Rgb) {
+        M::deliver(h, c, flux);
+    }
+
+    fn push(
+        &self,
+        parent: &ClusterNode<'a>,
+        child: &ClusterNode<'a>,
+        h: &M::Irradiance,
+    ) -> M::Irradiance {
+        M::push(parent, child, h)
+    }
+
+    fn reflect(
+        &self,
+        leaf: &ClusterNode<'a>,
+        h: &M::Irradiance,
+        with_emission: bool,
+    ) -> (Rgb, M::Exitance) {
+        M::reflect(leaf, h, with_emission)
+    }
+
+    fn uniform_response(&self, leaf: &ClusterNode<'a>) -> (Rgb, M::Exitance) {
+        M::uniform(leaf)
+    }
+}
+
+/// B = E + ρ h of a patch-like node (a cluster leaf cannot occur: clusters always split).
+pub fn reflect_node(leaf: &ClusterNode<'_>, h: Rgb, with_emission: bool) -> Rgb {
+    radlab_hierarchical::reflect_scalar(leaf.emission(), leaf.reflectance(), h, with_emission)
+}

@@ -1,0 +1,247 @@
+//! [`VolumeClusterSolver`]: the loose octree built over the scene's faces, materialised in the hierarchical
+//! engine down to the input faces (so every face is a node that gathers and sends), one root self-link, then
+//! the engine's refinement, gather/push-pull and schedules with the chosen cluster transfer. Output through the
+//! engine's shared output layer. [`ClusterSolver`] is the same, generic over the transfer, for tests that
+//! read the engine.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use radlab_hierarchical::{Engine, MIN_ELEMENT_SIZE_REL, PatchKernel, SurfaceOutput};
+use radlab_scene::{
+    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
+};
+
+use crate::cluster_node::ClusterNode;
+use crate::cluster_transport::{ClusterTransport, TransferMode};
+use crate::loose_octree::ClusterTree;
+use crate::params::{Transfer, VolumeClusterParams};
+use crate::transfer_alpha::Alpha;
+use crate::transfer_directional::Directional;
+use crate::transfer_isotropic::Isotropic;
+
+/// Volume-clustered hierarchical radiosity with transfer mode `M`.
+#[derive(Debug)]
+pub struct ClusterSolver<'a, M: TransferMode> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    tree: Arc<ClusterTree>,
+    engine: Engine<ClusterNode<'a>, ClusterTransport<'a, M>>,
+    output: SurfaceOutput,
+    rays: u64,
+}
+
+impl<'a, M: TransferMode> ClusterSolver<'a, M> {
+    /// Builds the cluster hierarchy over `scene` (rays through `accel`, built from the same scene) and the
+    /// root self-link. Cluster-link rays come from the engine's `visibility` parameter.
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: &VolumeClusterParams,
+        seed: u64,
+    ) -> Result<Self, SolveError> {
+        if scene.face_count() == 0 {
+            return Err(SolveError::param(
+                "scene",
+                "the scene has no faces to cluster",
+            ));
+        }
+        let tree = Arc::new(ClusterTree::build(scene));
+        let root = ClusterNode::root(Arc::clone(&tree), scene);
+        Self::from_roots(scene, accel, params, seed, tree, vec![root], &[(0, 0)])
+    }
+
+    /// A solver over the given roots (clusters of `tree`, or patches) and first links `(receiver,
+    /// source)` between root indices, with every cluster expanded down to its faces: the general form of
+    /// [`ClusterSolver::new`] (one root cluster over the whole scene and its self-link), for experiments and
+    /// tests that link chosen clusters.
+    pub fn from_roots(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: &VolumeClusterParams,
+        seed: u64,
+        tree: Arc<ClusterTree>,
+        roots: Vec<ClusterNode<'a>>,
+        first_links: &[(u32, u32)],
+    ) -> Result<Self, SolveError> {
+        params.validate()?;
+        let p = params.engine.clone();
+        let min_size = p
+            .min_element_size
+            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
+        if !(min_size > 0.0 && min_size.is_finite()) {
+            return Err(SolveError::param(
+                "min_element_size",
+                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
+            ));
+        }
+        let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
+        let transport = ClusterTransport::new(patches, accel, p.visibility, seed);
+        let output = SurfaceOutput::new(p.interpolation);
+        let n_roots = roots.len() as u32;
+        let mut engine = Engine::new(roots, transport, p, min_size)?;
+        engine.expand(|n| matches!(n, ClusterNode::Cluster(_)))?;
+        engine.skip_initial_links();
+        let before = accel.rays_cast();
+        for &(r, s) in first_links {
+            if r >= n_roots || s >= n_roots {
+                return Err(SolveError::param(
+                    "link",
+                    format!("root {r} or {s} does not exist ({n_roots} roots)"),
+                ));
+            }
+            let (r, s) = (engine.roots()[r as usize], engine.roots()[s as usize]);
+            engine.add_link(r, s)?;
+        }
+        let rays = accel.rays_cast().saturating_sub(before);
+        let mut s = Self {
+            scene,
+            accel,
+            tree,
+            engine,
+            output,
+            rays,
+        };
+        s.output.update(&s.engine, scene.face_count());
+        Ok(s)
+    }
+
+    /// The engine, for inspection and tests.
+    pub fn engine(&self) -> &Engine<ClusterNode<'a>, ClusterTransport<'a, M>> {
+        &self.engine
+    }
+
+    /// The cluster hierarchy.
+    pub fn tree(&self) -> &ClusterTree {
+        &self.tree
+    }
+
+    /// Radiosity, area and normal of every input face (the area-mean over its leaves).
+    pub fn face_radiosity(&self) -> Vec<(FaceId, f64, Rgb)> {
+        (0..self.scene.face_count())
+            .filter_map(|f| {
+                let i = self.engine.face_node(f)?;
+                Some((
+                    f,
+                    self.scene.faces[f].area,
+                    self.engine.radiosity()[i as usize],
+                ))
+            })
+            .collect()
+    }
+
+    fn stats(&self) -> Stats {
+        let e = &self.engine;
+        Stats {
+            steps: e.steps(),
+            elements: e.leaf_count() as u64,
+            links: e.link_count() as u64,
+            form_factors: e.form_factors(),
+            rays: self.rays,
+            bytes: e.bytes() + self.output.bytes() + self.tree.bytes(),
+            residual: e.residual(),
+        }
+    }
+
+    fn step(&mut self) -> Result<Step, SolveError> {
+        let before = self.accel.rays_cast();
+        let s = self.engine.step();
+        self.rays += self.accel.rays_cast().saturating_sub(before);
+        let s = s?;
+        self.output.update(&self.engine, self.scene.face_count());
+        Ok(s)
+    }
+}
+
+impl<M: TransferMode> Solution for ClusterSolver<'_, M> {
+    fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
+        self.output.radiosity_at(&self.engine, face, point)
+    }
+}
+
+impl<M: TransferMode> Solver for ClusterSolver<'_, M> {
+    fn step(&mut self) -> Result<Step, SolveError> {
+        ClusterSolver::step(self)
+    }
+
+    fn solution(&self) -> &dyn Solution {
+        self
+    }
+
+    fn stats(&self) -> Stats {
+        ClusterSolver::stats(self)
+    }
+}
+
+/// Volume-clustered hierarchical radiosity with the transfer chosen by [`VolumeClusterParams::transfer`]; see
+/// the crate documentation.
+#[derive(Debug)]
+pub enum VolumeClusterSolver<'a> {
+    /// `transfer = "isotropic"`.
+    Isotropic(ClusterSolver<'a, Isotropic>),
+    /// `transfer = "alpha"`.
+    Alpha(ClusterSolver<'a, Alpha>),
+    /// `transfer = "directional"`.
+    Directional(ClusterSolver<'a, Directional>),
+}
+
+macro_rules! each {
+    ($s:expr, $x:ident => $e:expr) => {
+        match $s {
+            VolumeClusterSolver::Isotropic($x) => $e,
+            VolumeClusterSolver::Alpha($x) => $e,
+            VolumeClusterSolver::Directional($x) => $e,
+        }
+    };
+}
+
+impl<'a> VolumeClusterSolver<'a> {
+    /// A solver for `scene` with `params` and `seed`; the hierarchy is built here (its cost is the
+    /// construction's, reported apart from the steps).
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: VolumeClusterParams,
+        seed: u64,
+    ) -> Result<Self, SolveError> {
+        Ok(match params.transfer {
+            Transfer::Isotropic => {
+                Self::Isotropic(ClusterSolver::new(scene, accel, &params, seed)?)
+            }
+            Transfer::Alpha => Self::Alpha(ClusterSolver::new(scene, accel, &params, seed)?),
+            Transfer::Directional => {
+                Self::Directional(ClusterSolver::new(scene, accel, &params, seed)?)
+            }
+        })
+    }
+
+    /// Radiosity, area and normal of every input face.
+    pub fn face_radiosity(&self) -> Vec<(FaceId, f64, Rgb)> {
+        each!(self, s => s.face_radiosity())
+    }
+
+    /// The cluster hierarchy.
+    pub fn tree(&self) -> &ClusterTree {
+        each!(self, s => s.tree())
+    }
+}
+
+impl Solution for VolumeClusterSolver<'_> {
+    fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
+        each!(self, s => s.radiosity_at(face, point))
+    }
+}
+
+impl Solver for VolumeClusterSolver<'_> {
+    fn step(&mut self) -> Result<Step, SolveError> {
+        each!(self, s => ClusterSolver::step(s))
+    }
+
+    fn solution(&self) -> &dyn Solution {
+        self
+    }
+
+    fn stats(&self) -> Stats {
+        each!(self, s => ClusterSolver::stats(s))
+    }
+}
