@@ -23,10 +23,12 @@
 //!
 //! The distance of a hit is therefore exact to f64 rounding, and surfaces a millionth of the scene's size
 //! apart are told apart at any scale. Quads are split into two triangles; each triangle maps back to its face.
-//! Every ray cast is counted (relaxed atomic), so solvers can report rays in their stats. `Accel` is `Sync`:
-//! cast from any number of rayon threads.
+//! Every ray cast is counted, exactly and whatever the number of threads, so solvers can report rays in
+//! their stats: each thread adds to a counter slot of its own (on its own cache line, so that threads never
+//! contend for one line), and [`Accel::rays_cast`] sums the slots. `Accel` is `Sync`: cast from any number of
+//! rayon threads.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use glam::{DVec3, UVec2, Vec3A};
@@ -176,6 +178,48 @@ fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
     bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
+/// Number of ray-counter slots ([`RayCounter`]); threads beyond this many share slots (still exact).
+const COUNTER_SLOTS: usize = 64;
+
+/// One counter slot, alone on its cache line pair (128 bytes: adjacent-line prefetchers fetch lines in pairs).
+#[derive(Default)]
+#[repr(align(128))]
+struct CounterSlot(AtomicU64);
+
+/// The slot of the calling thread: threads take slots in the order they first cast a ray.
+fn counter_slot() -> usize {
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    thread_local! {
+        static SLOT: usize = NEXT.fetch_add(1, Ordering::Relaxed) % COUNTER_SLOTS;
+    }
+    SLOT.with(|s| *s)
+}
+
+/// An exact count over all threads without a shared per-ray atomic: each thread adds (relaxed) to its own
+/// slot, which no other thread writes while fewer than [`COUNTER_SLOTS`] threads have cast rays, and the
+/// total is the sum of the slots. A shared counter costs a cache-line transfer between cores per ray; this
+/// one costs an uncontended add.
+struct RayCounter {
+    slots: Box<[CounterSlot]>,
+}
+
+impl RayCounter {
+    fn new() -> Self {
+        Self {
+            slots: (0..COUNTER_SLOTS).map(|_| CounterSlot::default()).collect(),
+        }
+    }
+
+    #[inline(always)]
+    fn add_one(&self) {
+        self.slots[counter_slot()].0.fetch_add(1, Ordering::Relaxed);
+    }
+
+    fn total(&self) -> u64 {
+        self.slots.iter().map(|s| s.0.load(Ordering::Relaxed)).sum()
+    }
+}
+
 /// The scene's acceleration structure and ray counter.
 pub struct Accel {
     bvh: CwBvh,
@@ -188,7 +232,7 @@ pub struct Accel {
     offset: DVec3,
     inv_scale: f64,
     tol: f64,
-    rays: AtomicU64,
+    rays: RayCounter,
     build_time: Duration,
 }
 
@@ -267,7 +311,7 @@ impl Accel {
             offset,
             inv_scale,
             tol: PLANE_TOL_REL * scale,
-            rays: AtomicU64::new(0),
+            rays: RayCounter::new(),
             build_time,
         }
     }
@@ -282,9 +326,10 @@ impl Accel {
         self.build_time
     }
 
-    /// Rays cast so far, over all threads.
+    /// Rays cast so far, over all threads: exact once the casting threads' work has been joined (rayon's
+    /// `join`, `scope` and parallel iterators do), and the same for any number of threads.
     pub fn rays_cast(&self) -> u64 {
-        self.rays.load(Ordering::Relaxed)
+        self.rays.total()
     }
 
     /// Number of triangles in the BVH (quads count two).
@@ -379,7 +424,7 @@ impl Accel {
             );
             return (None, cost);
         }
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.rays.add_one();
         let o = origin - self.offset;
         let mut ray = self.filter_ray(o, dir, tmax);
         let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
@@ -454,7 +499,7 @@ impl Accel {
             debug_assert!(len == 0.0, "segment with non-finite ends {p:?} {q:?}");
             return (true, cost);
         }
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.rays.add_one();
         let dir = d / len;
         let (p, q) = (p - self.offset, q - self.offset);
         let ray = self.filter_ray(p, dir, len);
