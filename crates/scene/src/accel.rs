@@ -223,10 +223,19 @@ impl RayCounter {
 /// The scene's acceleration structure and ray counter.
 pub struct Accel {
     bvh: CwBvh,
-    /// Triangles in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal.
-    tris: Vec<Triangle>,
-    tri_face: Vec<u32>,
+    /// Per BVH primitive slot (the order of `bvh.primitive_indices`, so that a leaf's triangles lie side by
+    /// side): the triangle in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal.
+    slot_tri: Vec<FilterTriangle>,
+    /// Per slot: the face.
+    slot_face: Vec<u32>,
+    /// Per slot: the f64 plane of the triangle: its first vertex (relative to `offset`) and unit normal.
+    slot_plane: Vec<[DVec3; 2]>,
+    /// Per triangle: its vertices.
     tri_verts: Vec<[u32; 3]>,
+    /// Bound on the rounding error of each f32 coordinate of an edge vector in `slot_tri`.
+    edge_err: f32,
+    /// Largest f32 coordinate magnitude of a vertex.
+    vert_max: f32,
     /// The scene's vertices in f64, relative to `offset`.
     verts: Vec<DVec3>,
     offset: DVec3,
@@ -239,31 +248,104 @@ pub struct Accel {
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("triangles", &self.tris.len())
+            .field("triangles", &self.tri_verts.len())
             .field("plane_tolerance", &self.tol)
             .finish()
     }
 }
 
-/// Loose f32 ray-triangle test (Möller & Trumbore 1997) with barycentric slack: true for every triangle the
-/// ray may hit within [0, tmax].
+/// A triangle for the f32 test: first vertex and the two edges from it (normalised coordinates).
+#[derive(Clone, Copy, Debug)]
+struct FilterTriangle {
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
+}
+
+/// What the f32 test concludes about a triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Filter {
+    /// The ray cannot hit it within [0, tmax].
+    Miss,
+    /// The ray's line certainly crosses the triangle's interior (the f64 edge test would pass).
+    Inside,
+    /// The ray may hit it: f64 decides.
+    Unsure,
+}
+
+/// The f32 filter ray with what its error bounds need.
+#[derive(Clone, Copy, Debug)]
+struct FilterRay {
+    o: Vec3A,
+    d: Vec3A,
+    /// ‖d‖₁.
+    d_l1: f32,
+    /// Bound on the error of each coordinate of `o − v0` against the exact (f64) values, which also covers
+    /// the rounding of `o` onto the f64 ray's line.
+    tv_err: f32,
+}
+
+/// Unit roundoff of f32.
+const EPS32: f32 = f32::EPSILON / 2.0;
+
+/// Bound on the error of the triple product a · (b × c) evaluated in f32 from vectors with L1 norms `a`,
+/// `b`, `c` whose coordinates are each off by at most `da`, `db`, `dc`: the perturbation terms (each
+/// coordinate error moves a triple product by at most its L1 norm in the other two factors; three
+/// coordinates) plus the rounding of the cross and dot products (five roundings per term, every term bounded
+/// by the product of L1 norms; Higham 2002, §3.1), doubled for second-order terms and for the rounding of the
+/// bound itself.
 #[inline(always)]
-fn f32_filter(tri: &Triangle, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
-    let e1 = tri.v1 - tri.v0;
-    let e2 = tri.v2 - tri.v0;
+fn triple_err(a: f32, b: f32, c: f32, da: f32, db: f32, dc: f32) -> f32 {
+    2.0 * (3.0 * (da * b * c + a * db * c + a * b * dc) + 5.0 * EPS32 * a * b * c)
+}
+
+/// The f32 ray-triangle test (Möller & Trumbore 1997). [`Filter::Miss`] exactly when the earlier loose
+/// filter rejected (barycentric slack [`F32_FILTER_BARY`], t outside [0, tmax]), with the same arithmetic,
+/// so answers are unchanged. Of the rest, [`Filter::Inside`] when conservative error bounds on the scaled
+/// barycentrics U = (o − v0) · (d × e2), V = d · ((o − v0) × e1) and W = det − U − V (the edge functions of
+/// Woop, Benthin & Wald 2013, evaluated in Möller–Trumbore form) prove all three of the sign of det, with
+/// det's sign certain: then the exact ray crosses the triangle's interior and the f64 edge test can be
+/// skipped. `edge_err` bounds the coordinate errors of `e1` and `e2`.
+#[inline(always)]
+fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32) -> Filter {
+    let (o, d) = (ray.o, ray.d);
+    let (e1, e2) = (tri.e1, tri.e2);
     let pv = d.cross(e2);
     let det = e1.dot(pv);
     if det == 0.0 {
-        return false;
+        return Filter::Miss;
     }
     let inv = 1.0 / det;
     let tv = o - tri.v0;
-    let u = tv.dot(pv) * inv;
+    let big_u = tv.dot(pv);
+    let u = big_u * inv;
     let qv = tv.cross(e1);
-    let v = d.dot(qv) * inv;
+    let big_v = d.dot(qv);
+    let v = big_v * inv;
     let t = e2.dot(qv) * inv;
     let eps = F32_FILTER_BARY;
-    u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= 0.0 && t <= tmax
+    if !(u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= 0.0 && t <= tmax) {
+        return Filter::Miss;
+    }
+    let (n1, n2, nt, nd) = (
+        e1.abs().element_sum(),
+        e2.abs().element_sum(),
+        tv.abs().element_sum(),
+        ray.d_l1,
+    );
+    let (de, dt, dd) = (edge_err, ray.tv_err, 2.0 * EPS32);
+    let err_det = triple_err(n1, nd, n2, de, dd, de);
+    let err_u = triple_err(nt, nd, n2, dt, dd, de);
+    let err_v = triple_err(nd, nt, n1, dd, dt, de);
+    let big_w = det - big_u - big_v;
+    let err_w =
+        err_det + err_u + err_v + 4.0 * EPS32 * (det.abs() + big_u.abs() + big_v.abs());
+    let s = det.signum();
+    if det.abs() > err_det && s * big_u > err_u && s * big_v > err_v && s * big_w > err_w {
+        Filter::Inside
+    } else {
+        Filter::Unsure
+    }
 }
 
 impl Accel {
@@ -280,8 +362,12 @@ impl Accel {
         let inv_scale = NORMALISED_DIAGONAL / scale;
         let verts: Vec<DVec3> = scene.vertices.iter().map(|&p| p - offset).collect();
         let to32 = |i: u32| Vec3A::from((verts[i as usize] * inv_scale).as_vec3());
+        let vert_max = verts
+            .iter()
+            .map(|&v| (v * inv_scale).abs().max_element())
+            .fold(0.0, f64::max) as f32;
         let mut tris = Vec::with_capacity(scene.faces.len() * 2);
-        let mut tri_face = Vec::with_capacity(scene.faces.len() * 2);
+        let mut tri_face: Vec<u32> = Vec::with_capacity(scene.faces.len() * 2);
         let mut tri_verts = Vec::with_capacity(scene.faces.len() * 2);
         for (f, face) in scene.faces.iter().enumerate() {
             let idx = face.indices;
@@ -302,11 +388,36 @@ impl Accel {
         let start = std::time::Instant::now();
         let bvh = build_bvh(&tris, preset.params());
         let build_time = start.elapsed();
+        let slots = &bvh.primitive_indices;
+        let slot_tri = slots
+            .iter()
+            .map(|&k| {
+                let t = &tris[k as usize];
+                FilterTriangle {
+                    v0: t.v0,
+                    e1: t.v1 - t.v0,
+                    e2: t.v2 - t.v0,
+                }
+            })
+            .collect();
+        let slot_face = slots.iter().map(|&k| tri_face[k as usize]).collect();
+        let slot_plane = slots
+            .iter()
+            .map(|&k| {
+                let [a, b, c] = tri_verts[k as usize].map(|i: u32| verts[i as usize]);
+                [a, (b - a).cross(c - a).normalize_or_zero()]
+            })
+            .collect();
         Self {
             bvh,
-            tris,
-            tri_face,
+            slot_tri,
+            slot_face,
+            slot_plane,
             tri_verts,
+            // Each coordinate of v0, v1, v2 is rounded once from f64 (relative error EPS32, coordinates at
+            // most vert_max), and the subtraction once more (|e| ≤ 2 vert_max).
+            edge_err: 4.0 * EPS32 * vert_max,
+            vert_max,
             verts,
             offset,
             inv_scale,
@@ -334,19 +445,22 @@ impl Accel {
 
     /// Number of triangles in the BVH (quads count two).
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.tri_verts.len()
     }
 
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.bvh.nodes.len() * 80
             + self.bvh.primitive_indices.len() * 4
-            + self.tris.len() * (size_of::<Triangle>() + 4 + 12)
+            + self.slot_tri.len()
+                * (size_of::<FilterTriangle>() + size_of::<u32>() + size_of::<[DVec3; 2]>())
+            + self.tri_verts.len() * size_of::<[u32; 3]>()
+            + COUNTER_SLOTS * size_of::<CounterSlot>()
             + self.verts.len() * size_of::<DVec3>()
     }
 
     /// The f32 filter ray from `o` (relative to `offset`) along `dir`, reaching `tmax` scene units.
-    fn filter_ray(&self, o: DVec3, dir: DVec3, tmax: f64) -> BvhRay {
+    fn filter_ray(&self, o: DVec3, dir: DVec3, tmax: f64) -> (BvhRay, FilterRay) {
         let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
         let origin = Vec3A::from((o * self.inv_scale - shift * dir).as_vec3());
         let tmax = if tmax.is_finite() {
@@ -354,13 +468,24 @@ impl Accel {
         } else {
             f32::INFINITY
         };
-        BvhRay::new(origin, Vec3A::from(dir.as_vec3()), 0.0, tmax)
+        let ray = BvhRay::new(origin, Vec3A::from(dir.as_vec3()), 0.0, tmax);
+        // o − v0: o rounded once (plus the f64 shift and scaling, far below f32's rounding), v0 once, and
+        // the difference once (|o − v0| ≤ |o| + vert_max).
+        let o_max = origin.abs().max_element();
+        let filter = FilterRay {
+            o: ray.origin,
+            d: ray.direction,
+            d_l1: ray.direction.abs().element_sum(),
+            tv_err: 4.0 * EPS32 * (o_max + self.vert_max),
+        };
+        (ray, filter)
     }
 
-    fn triangle(&self, tri: usize) -> (DVec3, DVec3, DVec3, DVec3) {
-        let [a, b, c] = self.tri_verts[tri].map(|i| self.verts[i as usize]);
-        let n = (b - a).cross(c - a).normalize_or_zero();
-        (a, b, c, n)
+    /// The vertices b, c of the triangle in `slot` (its first vertex and normal are in `slot_plane`).
+    fn far_vertices(&self, slot: usize) -> (DVec3, DVec3) {
+        let tri = self.bvh.primitive_indices[slot] as usize;
+        let [_, b, c] = self.tri_verts[tri];
+        (self.verts[b as usize], self.verts[c as usize])
     }
 
     /// Whether `x` (in the plane of triangle a, b, c with unit normal n) lies inside it within τ.
@@ -371,9 +496,11 @@ impl Accel {
         })
     }
 
-    /// The f64 hit distance of the ray (origin `o` relative to `offset`, unit `dir`) on triangle `tri`.
-    fn exact_hit(&self, tri: usize, o: DVec3, dir: DVec3) -> Option<f64> {
-        let (a, b, c, n) = self.triangle(tri);
+    /// The f64 hit distance of the ray (origin `o` relative to `offset`, unit `dir`) on the triangle in
+    /// `slot`; `inside` is true when the f32 test has proved that the ray's line crosses its interior.
+    #[inline(always)]
+    fn exact_hit(&self, slot: usize, o: DVec3, dir: DVec3, inside: bool) -> Option<f64> {
+        let [a, n] = self.slot_plane[slot];
         if n == DVec3::ZERO {
             return None;
         }
@@ -382,10 +509,22 @@ impl Accel {
         if s.abs() <= self.tol {
             // The origin lies on this triangle's plane: hit at once only if the ray enters its back from a
             // point of the (closed) triangle.
-            return (dn < 0.0 && self.inside(a, b, c, n, o)).then_some(0.0);
+            if dn >= 0.0 {
+                return None;
+            }
+            let (b, c) = self.far_vertices(slot);
+            return self.inside(a, b, c, n, o).then_some(0.0);
         }
         if s * dn < 0.0 {
             let t = -s / dn;
+            if inside {
+                debug_assert!({
+                    let (b, c) = self.far_vertices(slot);
+                    self.inside(a, b, c, n, o + t * dir)
+                });
+                return Some(t);
+            }
+            let (b, c) = self.far_vertices(slot);
             return self.inside(a, b, c, n, o + t * dir).then_some(t);
         }
         None
@@ -426,7 +565,7 @@ impl Accel {
         }
         self.rays.add_one();
         let o = origin - self.offset;
-        let mut ray = self.filter_ray(o, dir, tmax);
+        let (mut ray, fray) = self.filter_ray(o, dir, tmax);
         let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
         let mut best: Option<(usize, f64)> = None;
         // obvhs's closest-hit traversal (its `traverse!` macro, as in `CwBvh::ray_traverse`), counting the
@@ -443,11 +582,18 @@ impl Accel {
             },
             {
                 cost.triangles += 1;
-                let tri = self.bvh.primitive_indices[state.primitive_id as usize] as usize;
-                let face = self.tri_face[tri] as usize;
-                let candidate = face != skip
-                    && f32_filter(&self.tris[tri], ray.origin, ray.direction, ray.tmax);
-                if let Some(t) = candidate.then(|| self.exact_hit(tri, o, dir)).flatten() {
+                let slot = state.primitive_id as usize;
+                let face = self.slot_face[slot] as usize;
+                let filter = if face == skip {
+                    Filter::Miss
+                } else {
+                    f32_filter(&self.slot_tri[slot], &fray, ray.tmax, self.edge_err)
+                };
+                let hit = match filter {
+                    Filter::Miss => None,
+                    f => self.exact_hit(slot, o, dir, f == Filter::Inside),
+                };
+                if let Some(t) = hit {
                     let better = match best {
                         None => t <= tmax,
                         Some((_, bt)) => t < bt,
@@ -502,7 +648,7 @@ impl Accel {
         self.rays.add_one();
         let dir = d / len;
         let (p, q) = (p - self.offset, q - self.offset);
-        let ray = self.filter_ray(p, dir, len);
+        let (ray, fray) = self.filter_ray(p, dir, len);
         let tol = self.tol;
         let mut visible = true;
         // obvhs's any-hit traversal (as in `CwBvh::ray_traverse_miss`), counting nodes and triangles.
@@ -519,17 +665,26 @@ impl Accel {
                 },
                 {
                     cost.triangles += 1;
-                    let tri = self.bvh.primitive_indices[state.primitive_id as usize] as usize;
-                    let f = self.tri_face[tri] as usize;
-                    if f != fp
-                        && f != fq
-                        && f32_filter(&self.tris[tri], ray.origin, ray.direction, ray.tmax)
-                    {
-                        let (a, b, c, n) = self.triangle(tri);
+                    let slot = state.primitive_id as usize;
+                    let f = self.slot_face[slot] as usize;
+                    let filter = if f == fp || f == fq {
+                        Filter::Miss
+                    } else {
+                        f32_filter(&self.slot_tri[slot], &fray, ray.tmax, self.edge_err)
+                    };
+                    if filter != Filter::Miss {
+                        let [a, n] = self.slot_plane[slot];
                         let (sp, sq) = (n.dot(p - a), n.dot(q - a));
                         // Only a plane crossed between the ends, both ends clear of it, can occlude.
                         if ((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
-                            && self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                            && ({
+                                let check = || {
+                                    let (b, c) = self.far_vertices(slot);
+                                    self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                                };
+                                debug_assert!(filter != Filter::Inside || check());
+                                filter == Filter::Inside || check()
+                            })
                         {
                             visible = false;
                             break 'traversal;
@@ -539,5 +694,54 @@ impl Accel {
             );
         }
         (visible, cost)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling;
+
+    /// obvhs's parallel build (its `parallel` feature) splits work by the number of rayon threads; the BVH,
+    /// and with it the order in which ties between equally distant hits (rays through shared edges) are
+    /// broken, must not depend on it.
+    #[test]
+    fn bvh_is_the_same_on_any_number_of_threads() {
+        // More primitives than every parallel threshold of obvhs 0.4's PLOC build (4·10³ for the neighbour
+        // search, 3·10⁵ for the merge costs, 5·10⁵ for the leaf setup); one triangle in eight repeated
+        // exactly, so that Morton codes tie.
+        let mut r = sampling::rng(5, 0);
+        let mut tris: Vec<Triangle> = Vec::new();
+        while tris.len() < 520_000 {
+            let mut p = || {
+                Vec3A::new(
+                    sampling::uniform(&mut r) as f32,
+                    sampling::uniform(&mut r) as f32,
+                    sampling::uniform(&mut r) as f32,
+                )
+            };
+            let c = 500.0 * p();
+            let t = Triangle {
+                v0: c,
+                v1: c + p(),
+                v2: c + p(),
+            };
+            tris.push(t);
+            if tris.len() % 8 == 0 {
+                tris.push(t);
+            }
+        }
+        for preset in [AccelPreset::Fast, AccelPreset::Medium] {
+            let build = |threads: usize| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("pool")
+                    .install(|| build_bvh(&tris, preset.params()))
+            };
+            let one = build(1);
+            assert!(one == build(2), "{preset:?}: 1 and 2 threads differ");
+            assert!(one == build(3), "{preset:?}: 1 and 3 threads differ");
+        }
     }
 }
