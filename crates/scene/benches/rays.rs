@@ -8,6 +8,9 @@
 //!   bumpy sphere in its closed room with 10⁵ (the size of ARCHITECTURE.md's measurements) and 10⁶ triangles.
 //!   Closest hit is also timed with the presets in alternation (printed), which a shared machine's drifting
 //!   load cannot bias.
+//! - The 2-thread speed-up of closest hit and visibility (default preset, rays split into chunks over a rayon
+//!   pool of 1 and then 2 threads, in alternation; printed), and the ray count, which must be the same.
+//! - BVH build time of the bumpy sphere with 10⁶ triangles on pools of 1 and 2 threads.
 //! - BVH build time per preset, and BVH nodes and triangles visited per ray (printed once per scene and
 //!   preset, from `intersect_counting` / `visible_counting` over the same rays): a cost no other process
 //!   on the machine can disturb.
@@ -30,6 +33,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use glam::DVec3;
 use radlab_scene::sampling::{self, Rng};
 use radlab_scene::{Accel, AccelPreset, FaceId, Ray, Scene, builtin};
+use rayon::prelude::*;
 
 const PRESETS: [AccelPreset; 3] = [AccelPreset::Fast, AccelPreset::Medium, AccelPreset::Quality];
 const RAYS: usize = 20_000;
@@ -227,6 +231,69 @@ fn interleaved_comparison(name: &str, accels: &[Accel], w: &Workload) {
     );
 }
 
+/// Rays per second of the default preset on pools of 1 and 2 threads, in alternation (median of each), and
+/// the speed-up; also checks that the ray count does not depend on the number of threads.
+fn thread_scaling(name: &str, a: &Accel, w: &Workload) {
+    let rounds = 7;
+    let pools: Vec<rayon::ThreadPool> = [1, 2]
+        .iter()
+        .map(|&n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .expect("pool")
+        })
+        .collect();
+    let mut rates = [[const { Vec::new() }; 2]; 2];
+    let mut counts = [0u64; 2];
+    for _ in 0..rounds {
+        for (k, pool) in pools.iter().enumerate() {
+            let before = a.rays_cast();
+            let t = Instant::now();
+            let faces: usize = pool.install(|| {
+                w.bounces
+                    .par_chunks(256)
+                    .map(|c| {
+                        c.iter()
+                            .filter_map(|&(f, x, d)| a.intersect_from(f, x, d).map(|h| h.face))
+                            .sum::<usize>()
+                    })
+                    .sum()
+            });
+            rates[0][k].push(w.bounces.len() as f64 / t.elapsed().as_secs_f64());
+            black_box(faces);
+            let t = Instant::now();
+            let visible: usize = pool.install(|| {
+                w.segments
+                    .par_chunks(256)
+                    .map(|c| {
+                        c.iter()
+                            .filter(|&&(p, fp, q, fq)| a.visible_between(p, fp, q, fq))
+                            .count()
+                    })
+                    .sum()
+            });
+            rates[1][k].push(w.segments.len() as f64 / t.elapsed().as_secs_f64());
+            black_box(visible);
+            counts[k] = a.rays_cast() - before;
+        }
+    }
+    assert_eq!(counts[0], counts[1], "{name}: ray counts differ");
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (test, r) in ["closest hit", "visibility"].iter().zip(&mut rates) {
+        let (one, two) = (median(&mut r[0]), median(&mut r[1]));
+        eprintln!(
+            "{name}: {test}, median of {rounds} alternating rounds: 1 thread {:.3} M rays/s, 2 threads              {:.3} M rays/s, speed-up {:.2}×",
+            one / 1e6,
+            two / 1e6,
+            two / one
+        );
+    }
+}
+
 fn bench_scene(c: &mut Criterion, name: &str, spec: &str) {
     let t = Instant::now();
     let scene = builtin(spec).expect("builtin scene");
@@ -267,6 +334,7 @@ fn bench_scene(c: &mut Criterion, name: &str, spec: &str) {
     }
     check_answers(name, &scene, &accels, &w);
     interleaved_comparison(name, &accels, &w);
+    thread_scaling(name, &accels[0], &w);
 
     let mut g = c.benchmark_group(format!("closest_hit/{name}"));
     g.throughput(Throughput::Elements(w.bounces.len() as u64));
@@ -316,6 +384,22 @@ fn build(c: &mut Criterion) {
     for preset in PRESETS {
         g.bench_function(BenchmarkId::from_parameter(format!("{preset:?}")), |b| {
             b.iter(|| Accel::with_preset(&scene, preset).triangle_count())
+        });
+    }
+    g.finish();
+    let scene = builtin("bumpy-sphere?faces=1000000").expect("builtin scene");
+    let mut g = c.benchmark_group("build/bumpy-sphere-1M");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(
+        Accel::new(&scene).triangle_count() as u64,
+    ));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        g.bench_function(BenchmarkId::new("Fast", format!("{threads}-threads")), |b| {
+            b.iter(|| pool.install(|| Accel::new(&scene).triangle_count()))
         });
     }
     g.finish();

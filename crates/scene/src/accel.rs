@@ -31,7 +31,7 @@
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
-use glam::{DVec3, UVec2, Vec3A};
+use glam::{DVec3, UVec2, Vec3A, Vec4};
 use obvhs::{
     BvhBuildParams,
     aabb::Aabb,
@@ -224,10 +224,8 @@ impl RayCounter {
 pub struct Accel {
     bvh: CwBvh,
     /// Per BVH primitive slot (the order of `bvh.primitive_indices`, so that a leaf's triangles lie side by
-    /// side): the triangle in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal.
+    /// side): the triangle in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal, and its face.
     slot_tri: Vec<FilterTriangle>,
-    /// Per slot: the face.
-    slot_face: Vec<u32>,
     /// Per slot: the f64 plane of the triangle: its first vertex (relative to `offset`) and unit normal.
     slot_plane: Vec<[DVec3; 2]>,
     /// Per triangle: its vertices.
@@ -254,19 +252,36 @@ impl std::fmt::Debug for Accel {
     }
 }
 
-/// A triangle for the f32 test: first vertex and the two edges from it (normalised coordinates).
+/// A triangle for the f32 test: first vertex and the two edges from it (normalised coordinates), and its
+/// face, in one 48-byte record (the face's bits in the first vertex's fourth lane), so that the face check
+/// and the test read the same cache line.
 #[derive(Clone, Copy, Debug)]
 struct FilterTriangle {
-    v0: Vec3A,
+    v0_face: Vec4,
     e1: Vec3A,
     e2: Vec3A,
+}
+
+impl FilterTriangle {
+    #[inline(always)]
+    fn face(&self) -> usize {
+        self.v0_face.w.to_bits() as usize
+    }
+
+    #[inline(always)]
+    fn v0(&self) -> Vec3A {
+        Vec3A::from_vec4(self.v0_face)
+    }
 }
 
 /// What the f32 test concludes about a triangle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Filter {
-    /// The ray cannot hit it within [0, tmax].
+    /// The ray cannot hit it within [0, tmax] (the loose filter).
     Miss,
+    /// The f64 test would find it missed: the ray's line passes farther than 2τ outside the triangle, and
+    /// its origin, if on the plane, farther than τ.
+    Outside,
     /// The ray's line certainly crosses the triangle's interior (the f64 edge test would pass).
     Inside,
     /// The ray may hit it: f64 decides.
@@ -299,15 +314,24 @@ fn triple_err(a: f32, b: f32, c: f32, da: f32, db: f32, dc: f32) -> f32 {
     2.0 * (3.0 * (da * b * c + a * db * c + a * b * dc) + 5.0 * EPS32 * a * b * c)
 }
 
-/// The f32 ray-triangle test (Möller & Trumbore 1997). [`Filter::Miss`] exactly when the earlier loose
-/// filter rejected (barycentric slack [`F32_FILTER_BARY`], t outside [0, tmax]), with the same arithmetic,
-/// so answers are unchanged. Of the rest, [`Filter::Inside`] when conservative error bounds on the scaled
-/// barycentrics U = (o − v0) · (d × e2), V = d · ((o − v0) × e1) and W = det − U − V (the edge functions of
-/// Woop, Benthin & Wald 2013, evaluated in Möller–Trumbore form) prove all three of the sign of det, with
-/// det's sign certain: then the exact ray crosses the triangle's interior and the f64 edge test can be
-/// skipped. `edge_err` bounds the coordinate errors of `e1` and `e2`.
+/// The f32 ray-triangle test (Möller & Trumbore 1997), deciding in f32 wherever conservative error bounds
+/// allow, so that f64 is needed only near a triangle's edges:
+///
+/// - [`Filter::Miss`] first wherever the earlier loose filter rejected (barycentric slack
+///   [`F32_FILTER_BARY`], t outside [0, tmax]), with the same arithmetic, so answers are unchanged.
+/// - Of the rest, with U = (o − v0) · (d × e2), V = d · ((o − v0) × e1), W = det − U − V (the scaled barycentrics, the
+///   edge functions of Woop, Benthin & Wald 2013 in Möller–Trumbore form) and bounds on their errors against
+///   exact arithmetic on the f64 scene (`triple_err`), det's sign being certain: [`Filter::Inside`] when all
+///   three certainly have det's sign (the exact line crosses the triangle's interior, so the f64 edge test
+///   would pass); missed when one certainly has the opposite sign by more than 2τ‖e‖₁, e the edge
+///   where it vanishes ([`Filter::Outside`]). The line then crosses the plane farther than 2τ outside that edge (a scaled
+///   barycentric is the distance from its edge × |cos θ| × |e|), and the origin, within τ/|cos θ| of the
+///   crossing when it lies on the plane, farther than τ: the f64 test finds neither inside.
+/// - [`Filter::Unsure`] otherwise: f64 decides.
+///
+/// `edge_err` bounds the coordinate errors of `e1` and `e2`; `tau` is τ in normalised units.
 #[inline(always)]
-fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32) -> Filter {
+fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32, tau: f32) -> Filter {
     let (o, d) = (ray.o, ray.d);
     let (e1, e2) = (tri.e1, tri.e2);
     let pv = d.cross(e2);
@@ -316,7 +340,7 @@ fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32) -
         return Filter::Miss;
     }
     let inv = 1.0 / det;
-    let tv = o - tri.v0;
+    let tv = o - tri.v0();
     let big_u = tv.dot(pv);
     let u = big_u * inv;
     let qv = tv.cross(e1);
@@ -340,12 +364,23 @@ fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32) -
     let big_w = det - big_u - big_v;
     let err_w =
         err_det + err_u + err_v + 4.0 * EPS32 * (det.abs() + big_u.abs() + big_v.abs());
-    let s = det.signum();
-    if det.abs() > err_det && s * big_u > err_u && s * big_v > err_v && s * big_w > err_w {
-        Filter::Inside
-    } else {
-        Filter::Unsure
+    if det.abs() <= err_det {
+        return Filter::Unsure;
     }
+    let s = det.signum();
+    let (su, sv, sw) = (s * big_u, s * big_v, s * big_w);
+    if su > err_u && sv > err_v && sw > err_w {
+        return Filter::Inside;
+    }
+    // Twice τ, and padded for the rounding of the edges' norms.
+    let tau2 = 2.0 * tau * (1.0 + 16.0 * EPS32);
+    if su < -(err_u + tau2 * (n2 + 3.0 * de))
+        || sv < -(err_v + tau2 * (n1 + 3.0 * de))
+        || sw < -(err_w + tau2 * (n1 + n2 + 6.0 * de))
+    {
+        return Filter::Outside;
+    }
+    Filter::Unsure
 }
 
 impl Accel {
@@ -394,13 +429,12 @@ impl Accel {
             .map(|&k| {
                 let t = &tris[k as usize];
                 FilterTriangle {
-                    v0: t.v0,
+                    v0_face: t.v0.extend(f32::from_bits(tri_face[k as usize])),
                     e1: t.v1 - t.v0,
                     e2: t.v2 - t.v0,
                 }
             })
             .collect();
-        let slot_face = slots.iter().map(|&k| tri_face[k as usize]).collect();
         let slot_plane = slots
             .iter()
             .map(|&k| {
@@ -411,7 +445,6 @@ impl Accel {
         Self {
             bvh,
             slot_tri,
-            slot_face,
             slot_plane,
             tri_verts,
             // Each coordinate of v0, v1, v2 is rounded once from f64 (relative error EPS32, coordinates at
@@ -453,7 +486,7 @@ impl Accel {
         self.bvh.nodes.len() * 80
             + self.bvh.primitive_indices.len() * 4
             + self.slot_tri.len()
-                * (size_of::<FilterTriangle>() + size_of::<u32>() + size_of::<[DVec3; 2]>())
+                * (size_of::<FilterTriangle>() + size_of::<[DVec3; 2]>())
             + self.tri_verts.len() * size_of::<[u32; 3]>()
             + COUNTER_SLOTS * size_of::<CounterSlot>()
             + self.verts.len() * size_of::<DVec3>()
@@ -566,6 +599,7 @@ impl Accel {
         self.rays.add_one();
         let o = origin - self.offset;
         let (mut ray, fray) = self.filter_ray(o, dir, tmax);
+        let tau32 = (PLANE_TOL_REL * NORMALISED_DIAGONAL) as f32;
         let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
         let mut best: Option<(usize, f64)> = None;
         // obvhs's closest-hit traversal (its `traverse!` macro, as in `CwBvh::ray_traverse`), counting the
@@ -583,14 +617,19 @@ impl Accel {
             {
                 cost.triangles += 1;
                 let slot = state.primitive_id as usize;
-                let face = self.slot_face[slot] as usize;
+                let tri = &self.slot_tri[slot];
+                let face = tri.face();
                 let filter = if face == skip {
                     Filter::Miss
                 } else {
-                    f32_filter(&self.slot_tri[slot], &fray, ray.tmax, self.edge_err)
+                    f32_filter(tri, &fray, ray.tmax, self.edge_err, tau32)
                 };
                 let hit = match filter {
                     Filter::Miss => None,
+                    Filter::Outside => {
+                        debug_assert!(self.exact_hit(slot, o, dir, false).is_none());
+                        None
+                    }
                     f => self.exact_hit(slot, o, dir, f == Filter::Inside),
                 };
                 if let Some(t) = hit {
@@ -649,6 +688,7 @@ impl Accel {
         let dir = d / len;
         let (p, q) = (p - self.offset, q - self.offset);
         let (ray, fray) = self.filter_ray(p, dir, len);
+        let tau32 = (PLANE_TOL_REL * NORMALISED_DIAGONAL) as f32;
         let tol = self.tol;
         let mut visible = true;
         // obvhs's any-hit traversal (as in `CwBvh::ray_traverse_miss`), counting nodes and triangles.
@@ -666,13 +706,22 @@ impl Accel {
                 {
                     cost.triangles += 1;
                     let slot = state.primitive_id as usize;
-                    let f = self.slot_face[slot] as usize;
+                    let tri = &self.slot_tri[slot];
+                    let f = tri.face();
                     let filter = if f == fp || f == fq {
                         Filter::Miss
                     } else {
-                        f32_filter(&self.slot_tri[slot], &fray, ray.tmax, self.edge_err)
+                        f32_filter(tri, &fray, ray.tmax, self.edge_err, tau32)
                     };
-                    if filter != Filter::Miss {
+                    if filter == Filter::Outside {
+                        debug_assert!({
+                            let [a, n] = self.slot_plane[slot];
+                            let (b, c) = self.far_vertices(slot);
+                            let (sp, sq) = (n.dot(p - a), n.dot(q - a));
+                            !((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
+                                || !self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                        });
+                    } else if filter != Filter::Miss {
                         let [a, n] = self.slot_plane[slot];
                         let (sp, sq) = (n.dot(p - a), n.dot(q - a));
                         // Only a plane crossed between the ends, both ends clear of it, can occlude.
