@@ -303,15 +303,15 @@ struct FilterRay {
 /// Unit roundoff of f32.
 const EPS32: f32 = f32::EPSILON / 2.0;
 
-/// Bound on the error of the triple product a · (b × c) evaluated in f32 from vectors with L1 norms `a`,
-/// `b`, `c` whose coordinates are each off by at most `da`, `db`, `dc`: the perturbation terms (each
-/// coordinate error moves a triple product by at most its L1 norm in the other two factors; three
-/// coordinates) plus the rounding of the cross and dot products (five roundings per term, every term bounded
-/// by the product of L1 norms; Higham 2002, §3.1), doubled for second-order terms and for the rounding of the
-/// bound itself.
+/// Bound on the error of a triple product a · (b × c) evaluated in f32 from inputs whose coordinates are
+/// off: `moved` bounds how far the input errors move the exact product (each factor's largest coordinate
+/// error times the L1 norm of the cross product of the other two, |Δa · (b × c)| ≤ ‖Δa‖∞ ‖b × c‖₁), tripled;
+/// `abc` is the product of the three L1 norms, which bounds the sum of the magnitudes of its six terms, each
+/// evaluated with at most five roundings (Higham 2002, §3.1). Doubled for second-order terms and for the
+/// rounding of the bound itself.
 #[inline(always)]
-fn triple_err(a: f32, b: f32, c: f32, da: f32, db: f32, dc: f32) -> f32 {
-    2.0 * (3.0 * (da * b * c + a * db * c + a * b * dc) + 5.0 * EPS32 * a * b * c)
+fn triple_err(moved: f32, abc: f32) -> f32 {
+    2.0 * (3.0 * moved + 5.0 * EPS32 * abc)
 }
 
 /// The f32 ray-triangle test (Möller & Trumbore 1997), deciding in f32 wherever conservative error bounds
@@ -358,9 +358,13 @@ fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32, t
         ray.d_l1,
     );
     let (de, dt, dd) = (edge_err, ray.tv_err, 2.0 * EPS32);
-    let err_det = triple_err(n1, nd, n2, de, dd, de);
-    let err_u = triple_err(nt, nd, n2, dt, dd, de);
-    let err_v = triple_err(nd, nt, n1, dd, dt, de);
+    // U = e2 · ((o − v0) × d) and V = e1 · (d × (o − v0)): the edges' errors move them by at most their
+    // coordinate error times ‖(o − v0) × d‖₁, small for a triangle near the line however far from the
+    // origin (bounded here from its f32 value, its rounding and its inputs' errors).
+    let w = tv.cross(d).abs().element_sum() + 4.0 * EPS32 * nt * nd + 2.0 * (dt * nd + nt * dd);
+    let err_det = triple_err(de * nd * n2 + dd * n1 * n2 + de * n1 * nd, n1 * nd * n2);
+    let err_u = triple_err(dt * nd * n2 + dd * nt * n2 + de * w, nt * nd * n2);
+    let err_v = triple_err(dd * nt * n1 + dt * nd * n1 + de * w, nd * nt * n1);
     let big_w = det - big_u - big_v;
     let err_w =
         err_det + err_u + err_v + 4.0 * EPS32 * (det.abs() + big_u.abs() + big_v.abs());
