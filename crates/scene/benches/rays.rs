@@ -391,16 +391,17 @@ fn build(c: &mut Criterion) {
     let mut g = c.benchmark_group("build/bumpy-sphere-1M");
     g.sample_size(10);
     g.throughput(Throughput::Elements(
-        Accel::new(&scene).triangle_count() as u64,
+        Accel::new(&scene).triangle_count() as u64
     ));
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .expect("pool");
-        g.bench_function(BenchmarkId::new("Fast", format!("{threads}-threads")), |b| {
-            b.iter(|| pool.install(|| Accel::new(&scene).triangle_count()))
-        });
+        g.bench_function(
+            BenchmarkId::new("Fast", format!("{threads}-threads")),
+            |b| b.iter(|| pool.install(|| Accel::new(&scene).triangle_count())),
+        );
     }
     g.finish();
 }

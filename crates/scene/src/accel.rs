@@ -1,12 +1,19 @@
 //! Ray casting over the scene's faces: closest hit and point-to-point visibility, on an obvhs compressed
-//! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion.
+//! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion (obvhs's parallel build: the same BVH
+//! on any number of rayon threads).
 //!
 //! Two stages per candidate triangle. The BVH and a first triangle test run in f32 on coordinates normalised
 //! to the scene's bounds (centre at 0, diagonal [`NORMALISED_DIAGONAL`]), so their precision is relative to the
 //! scene's size and independent of its scale and position. The f32 test is a loose filter (barycentric
 //! tolerance [`F32_FILTER_BARY`]; ray origin moved back by [`F32_FILTER_SHIFT`], because obvhs's node test
 //! skips boxes the ray leaves within 1e-4 units of its origin, which would drop touching surfaces; primitive
-//! boxes padded by [`BOX_PAD_REL`]). The answer is then decided in f64 against the triangle's exact plane:
+//! boxes padded by [`BOX_PAD_REL`]). The answer is then decided in f64 against the triangle's exact plane,
+//! as below; but wherever conservative bounds on the f32 test's rounding errors prove that the ray's line
+//! crosses the triangle's interior, or passes it farther than 2τ outside, the f64 edge test (and the vertex
+//! fetch it needs) is skipped, since its answer is then known (`f32_filter`). Only lines within the f32
+//! error bound of an edge, a small fraction of the candidates, reach the f64 edge test, so answers are those
+//! of the f64 test, bit for bit, at mostly f32 cost. The f32 triangles (with their faces) and the f64 planes
+//! are stored in the BVH's leaf order, so a leaf's candidates are side by side in memory.
 //!
 //! - s = signed distance of the ray origin from the plane (positive in front), τ = [`PLANE_TOL_REL`] × diagonal.
 //!   A surface the origin lies on (|s| ≤ τ, origin in the closed polygon) is hit at t = 0 only if the ray
@@ -366,8 +373,7 @@ fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32, t
     let err_u = triple_err(dt * nd * n2 + dd * nt * n2 + de * w, nt * nd * n2);
     let err_v = triple_err(dd * nt * n1 + dt * nd * n1 + de * w, nd * nt * n1);
     let big_w = det - big_u - big_v;
-    let err_w =
-        err_det + err_u + err_v + 4.0 * EPS32 * (det.abs() + big_u.abs() + big_v.abs());
+    let err_w = err_det + err_u + err_v + 4.0 * EPS32 * (det.abs() + big_u.abs() + big_v.abs());
     if det.abs() <= err_det {
         return Filter::Unsure;
     }
@@ -489,8 +495,7 @@ impl Accel {
     pub fn bytes(&self) -> usize {
         self.bvh.nodes.len() * 80
             + self.bvh.primitive_indices.len() * 4
-            + self.slot_tri.len()
-                * (size_of::<FilterTriangle>() + size_of::<[DVec3; 2]>())
+            + self.slot_tri.len() * (size_of::<FilterTriangle>() + size_of::<[DVec3; 2]>())
             + self.tri_verts.len() * size_of::<[u32; 3]>()
             + COUNTER_SLOTS * size_of::<CounterSlot>()
             + self.verts.len() * size_of::<DVec3>()

@@ -761,9 +761,13 @@ fn f32_decisions_agree_with_f64_near_edges_and_at_grazing_angles() {
             cast += 1;
             if let (Some(h), Some((f, t_bf))) = (h, brute_force(&scene, o, d, 0.0, usize::MAX)) {
                 // Away from both faces' edges the nearest face is unambiguous.
-                let clear = |face: FaceId, x: DVec3| distance_to_boundary(&scene.polygon(face), x) > 1e-6;
+                let clear =
+                    |face: FaceId, x: DVec3| distance_to_boundary(&scene.polygon(face), x) > 1e-6;
                 if clear(f, o + t_bf * d) && clear(h.face, h.point) {
-                    assert_eq!(h.face, f, "triangle {k} ray {j}: {h:?} brute force t {t_bf}");
+                    assert_eq!(
+                        h.face, f,
+                        "triangle {k} ray {j}: {h:?} brute force t {t_bf}"
+                    );
                     assert!((h.t - t_bf).abs() < 1e-9, "triangle {k} ray {j}");
                 }
             }
