@@ -244,37 +244,27 @@ fn thread_scaling(name: &str, a: &Accel, w: &Workload) {
                 .expect("pool")
         })
         .collect();
-    let mut rates = [[const { Vec::new() }; 2]; 2];
+    let mut rates: [[Vec<f64>; 2]; 2] = Default::default();
     let mut counts = [0u64; 2];
     for _ in 0..rounds {
         for (k, pool) in pools.iter().enumerate() {
             let before = a.rays_cast();
-            let t = Instant::now();
-            let faces: usize = pool.install(|| {
-                w.bounces
-                    .par_chunks(256)
-                    .map(|c| {
-                        c.iter()
-                            .filter_map(|&(f, x, d)| a.intersect_from(f, x, d).map(|h| h.face))
-                            .sum::<usize>()
-                    })
-                    .sum()
-            });
-            rates[0][k].push(w.bounces.len() as f64 / t.elapsed().as_secs_f64());
-            black_box(faces);
-            let t = Instant::now();
-            let visible: usize = pool.install(|| {
-                w.segments
-                    .par_chunks(256)
-                    .map(|c| {
-                        c.iter()
-                            .filter(|&&(p, fp, q, fq)| a.visible_between(p, fp, q, fq))
-                            .count()
-                    })
-                    .sum()
-            });
-            rates[1][k].push(w.segments.len() as f64 / t.elapsed().as_secs_f64());
-            black_box(visible);
+            // Rays per second of `cast` (one ray per item, summing what it returns) over `n` items.
+            let rate = |n: usize, cast: &(dyn Fn(usize) -> usize + Sync)| {
+                let t = Instant::now();
+                let sum: usize =
+                    pool.install(|| (0..n).into_par_iter().with_min_len(256).map(cast).sum());
+                black_box(sum);
+                n as f64 / t.elapsed().as_secs_f64()
+            };
+            rates[0][k].push(rate(w.bounces.len(), &|i| {
+                let (f, x, d) = w.bounces[i];
+                a.intersect_from(f, x, d).map_or(0, |h| h.face)
+            }));
+            rates[1][k].push(rate(w.segments.len(), &|i| {
+                let (p, fp, q, fq) = w.segments[i];
+                usize::from(a.visible_between(p, fp, q, fq))
+            }));
             counts[k] = a.rays_cast() - before;
         }
     }

@@ -788,7 +788,7 @@ mod tests {
                 v2: c + p(),
             };
             tris.push(t);
-            if tris.len() % 8 == 0 {
+            if tris.len().is_multiple_of(8) {
                 tris.push(t);
             }
         }
