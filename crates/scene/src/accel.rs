@@ -792,17 +792,16 @@ mod tests {
                 tris.push(t);
             }
         }
-        for preset in [AccelPreset::Fast, AccelPreset::Medium] {
-            let build = |threads: usize| {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .expect("pool")
-                    .install(|| build_bvh(&tris, preset.params()))
-            };
-            let one = build(1);
-            assert!(one == build(2), "{preset:?}: 1 and 2 threads differ");
-            assert!(one == build(3), "{preset:?}: 1 and 3 threads differ");
-        }
+        // The default preset (the others run the same parallel stages with other parameters).
+        let build = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| build_bvh(&tris, AccelPreset::Fast.params()))
+        };
+        let one = build(1);
+        assert!(one == build(2), "1 and 2 threads differ");
+        assert!(one == build(3), "1 and 3 threads differ");
     }
 }
