@@ -276,7 +276,7 @@ fn thread_scaling(name: &str, a: &Accel, w: &Workload) {
     for (test, r) in ["closest hit", "visibility"].iter().zip(&mut rates) {
         let (one, two) = (median(&mut r[0]), median(&mut r[1]));
         eprintln!(
-            "{name}: {test}, median of {rounds} alternating rounds: 1 thread {:.3} M rays/s, 2 threads              {:.3} M rays/s, speed-up {:.2}×",
+            "{name}: {test}, median of {rounds} alternating rounds: 1 thread {:.3} M rays/s, 2 threads {:.3} M rays/s, speed-up {:.2}×",
             one / 1e6,
             two / 1e6,
             two / one
