@@ -79,6 +79,7 @@ pub fn render(
 ) -> (Image, Image) {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let estimator = PathEstimator::new(scene, accel, params.max_depth, params.direct);
+    let frame = camera.frame();
     let done = AtomicUsize::new(0);
     let total = w * h;
     let rows: Vec<Vec<(Rgb, Rgb)>> = (0..h)
@@ -90,7 +91,7 @@ pub fn render(
                     let mut stats = RunningStats::default();
                     for _ in 0..params.samples_per_pixel {
                         let (jx, jy) = (sampling::uniform(&mut rng), sampling::uniform(&mut rng));
-                        let ray = camera.ray(x as f64 + jx, y as f64 + jy);
+                        let ray = frame.ray(x as f64 + jx, y as f64 + jy);
                         let radiance = match accel.intersect(&ray) {
                             Some(hit) if scene.faces[hit.face].normal.dot(ray.dir) < 0.0 => {
                                 estimator.radiosity(

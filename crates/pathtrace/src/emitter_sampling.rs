@@ -5,7 +5,7 @@
 //! multiple importance sampling needs when a hemisphere-sampled ray happens to hit an emitter.
 
 use glam::DVec3;
-use radlab_scene::{FaceId, Rgb, Scene};
+use radlab_scene::{AreaSampler, FaceId, Rgb, Scene};
 
 use crate::discrete_distribution::Discrete;
 
@@ -29,6 +29,8 @@ pub(crate) struct LightSample {
 #[derive(Clone, Debug)]
 pub(crate) struct EmitterSampler {
     faces: Vec<FaceId>,
+    /// Per emitter, its polygon's area sampler (built once, not per sample).
+    samplers: Vec<AreaSampler>,
     choose: Discrete,
     /// Ē_f / total power (the area density) for emitting faces, for lookup from any face.
     density: Vec<(FaceId, f64)>,
@@ -55,8 +57,13 @@ impl EmitterSampler {
                 (f, d)
             })
             .collect();
+        let samplers = faces
+            .iter()
+            .map(|&f| AreaSampler::new(scene.polygon(f)))
+            .collect();
         Self {
             faces,
+            samplers,
             choose,
             density,
         }
@@ -68,7 +75,7 @@ impl EmitterSampler {
     }
 
     /// A point on an emitter from three numbers in [0, 1).
-    pub(crate) fn sample(&self, scene: &Scene, u0: f64, u1: f64, u2: f64) -> Option<LightSample> {
+    pub(crate) fn sample(&self, u0: f64, u1: f64, u2: f64) -> Option<LightSample> {
         if self.is_empty() {
             return None;
         }
@@ -76,7 +83,7 @@ impl EmitterSampler {
         let face = self.faces[k];
         Some(LightSample {
             face,
-            point: scene.polygon(face).sample_uniform(u1, u2),
+            point: self.samplers[k].sample(u1, u2),
             pdf_area: self.density[k].1,
         })
     }

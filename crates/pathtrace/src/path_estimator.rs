@@ -137,7 +137,7 @@ impl<'a> PathEstimator<'a> {
             sampling::uniform(rng),
             sampling::uniform(rng),
         );
-        let Some(light) = self.emitters.sample(self.scene, u0, u1, u2) else {
+        let Some(light) = self.emitters.sample(u0, u1, u2) else {
             return Rgb::ZERO;
         };
         if light.face == f {

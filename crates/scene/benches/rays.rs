@@ -8,6 +8,9 @@
 //!   bumpy sphere in its closed room with 10⁵ (the size of ARCHITECTURE.md's measurements) and 10⁶ triangles.
 //!   Closest hit is also timed with the presets in alternation (printed), which a shared machine's drifting
 //!   load cannot bias.
+//! - The 2-thread speed-up of closest hit and visibility (default preset, rays split into chunks over a rayon
+//!   pool of 1 and then 2 threads, in alternation; printed), and the ray count, which must be the same.
+//! - BVH build time of the bumpy sphere with 10⁶ triangles on pools of 1 and 2 threads.
 //! - BVH build time per preset, and BVH nodes and triangles visited per ray (printed once per scene and
 //!   preset, from `intersect_counting` / `visible_counting` over the same rays): a cost no other process
 //!   on the machine can disturb.
@@ -30,6 +33,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use glam::DVec3;
 use radlab_scene::sampling::{self, Rng};
 use radlab_scene::{Accel, AccelPreset, FaceId, Ray, Scene, builtin};
+use rayon::prelude::*;
 
 const PRESETS: [AccelPreset; 3] = [AccelPreset::Fast, AccelPreset::Medium, AccelPreset::Quality];
 const RAYS: usize = 20_000;
@@ -227,6 +231,59 @@ fn interleaved_comparison(name: &str, accels: &[Accel], w: &Workload) {
     );
 }
 
+/// Rays per second of the default preset on pools of 1 and 2 threads, in alternation (median of each), and
+/// the speed-up; also checks that the ray count does not depend on the number of threads.
+fn thread_scaling(name: &str, a: &Accel, w: &Workload) {
+    let rounds = 7;
+    let pools: Vec<rayon::ThreadPool> = [1, 2]
+        .iter()
+        .map(|&n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .expect("pool")
+        })
+        .collect();
+    let mut rates: [[Vec<f64>; 2]; 2] = Default::default();
+    let mut counts = [0u64; 2];
+    for _ in 0..rounds {
+        for (k, pool) in pools.iter().enumerate() {
+            let before = a.rays_cast();
+            // Rays per second of `cast` (one ray per item, summing what it returns) over `n` items.
+            let rate = |n: usize, cast: &(dyn Fn(usize) -> usize + Sync)| {
+                let t = Instant::now();
+                let sum: usize =
+                    pool.install(|| (0..n).into_par_iter().with_min_len(256).map(cast).sum());
+                black_box(sum);
+                n as f64 / t.elapsed().as_secs_f64()
+            };
+            rates[0][k].push(rate(w.bounces.len(), &|i| {
+                let (f, x, d) = w.bounces[i];
+                a.intersect_from(f, x, d).map_or(0, |h| h.face)
+            }));
+            rates[1][k].push(rate(w.segments.len(), &|i| {
+                let (p, fp, q, fq) = w.segments[i];
+                usize::from(a.visible_between(p, fp, q, fq))
+            }));
+            counts[k] = a.rays_cast() - before;
+        }
+    }
+    assert_eq!(counts[0], counts[1], "{name}: ray counts differ");
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (test, r) in ["closest hit", "visibility"].iter().zip(&mut rates) {
+        let (one, two) = (median(&mut r[0]), median(&mut r[1]));
+        eprintln!(
+            "{name}: {test}, median of {rounds} alternating rounds: 1 thread {:.3} M rays/s, 2 threads {:.3} M rays/s, speed-up {:.2}×",
+            one / 1e6,
+            two / 1e6,
+            two / one
+        );
+    }
+}
+
 fn bench_scene(c: &mut Criterion, name: &str, spec: &str) {
     let t = Instant::now();
     let scene = builtin(spec).expect("builtin scene");
@@ -267,6 +324,7 @@ fn bench_scene(c: &mut Criterion, name: &str, spec: &str) {
     }
     check_answers(name, &scene, &accels, &w);
     interleaved_comparison(name, &accels, &w);
+    thread_scaling(name, &accels[0], &w);
 
     let mut g = c.benchmark_group(format!("closest_hit/{name}"));
     g.throughput(Throughput::Elements(w.bounces.len() as u64));
@@ -317,6 +375,23 @@ fn build(c: &mut Criterion) {
         g.bench_function(BenchmarkId::from_parameter(format!("{preset:?}")), |b| {
             b.iter(|| Accel::with_preset(&scene, preset).triangle_count())
         });
+    }
+    g.finish();
+    let scene = builtin("bumpy-sphere?faces=1000000").expect("builtin scene");
+    let mut g = c.benchmark_group("build/bumpy-sphere-1M");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(
+        Accel::new(&scene).triangle_count() as u64
+    ));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        g.bench_function(
+            BenchmarkId::new("Fast", format!("{threads}-threads")),
+            |b| b.iter(|| pool.install(|| Accel::new(&scene).triangle_count())),
+        );
     }
     g.finish();
 }

@@ -1,12 +1,19 @@
 //! Ray casting over the scene's faces: closest hit and point-to-point visibility, on an obvhs compressed
-//! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion.
+//! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion (obvhs's parallel build: the same BVH
+//! on any number of rayon threads).
 //!
 //! Two stages per candidate triangle. The BVH and a first triangle test run in f32 on coordinates normalised
 //! to the scene's bounds (centre at 0, diagonal [`NORMALISED_DIAGONAL`]), so their precision is relative to the
 //! scene's size and independent of its scale and position. The f32 test is a loose filter (barycentric
 //! tolerance [`F32_FILTER_BARY`]; ray origin moved back by [`F32_FILTER_SHIFT`], because obvhs's node test
 //! skips boxes the ray leaves within 1e-4 units of its origin, which would drop touching surfaces; primitive
-//! boxes padded by [`BOX_PAD_REL`]). The answer is then decided in f64 against the triangle's exact plane:
+//! boxes padded by [`BOX_PAD_REL`]). The answer is then decided in f64 against the triangle's exact plane,
+//! as below; but wherever conservative bounds on the f32 test's rounding errors prove that the ray's line
+//! crosses the triangle's interior, or passes it farther than 2τ outside, the f64 edge test (and the vertex
+//! fetch it needs) is skipped, since its answer is then known (`f32_filter`). Only lines within the f32
+//! error bound of an edge, a small fraction of the candidates, reach the f64 edge test, so answers are those
+//! of the f64 test, bit for bit, at mostly f32 cost. The f32 triangles (with their faces) and the f64 planes
+//! are stored in the BVH's leaf order, so a leaf's candidates are side by side in memory.
 //!
 //! - s = signed distance of the ray origin from the plane (positive in front), τ = [`PLANE_TOL_REL`] × diagonal.
 //!   A surface the origin lies on (|s| ≤ τ, origin in the closed polygon) is hit at t = 0 only if the ray
@@ -23,13 +30,15 @@
 //!
 //! The distance of a hit is therefore exact to f64 rounding, and surfaces a millionth of the scene's size
 //! apart are told apart at any scale. Quads are split into two triangles; each triangle maps back to its face.
-//! Every ray cast is counted (relaxed atomic), so solvers can report rays in their stats. `Accel` is `Sync`:
-//! cast from any number of rayon threads.
+//! Every ray cast is counted, exactly and whatever the number of threads, so solvers can report rays in
+//! their stats: each thread adds to a counter slot of its own (on its own cache line, so that threads never
+//! contend for one line), and [`Accel::rays_cast`] sums the slots. `Accel` is `Sync`: cast from any number of
+//! rayon threads.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
-use glam::{DVec3, UVec2, Vec3A};
+use glam::{DVec3, UVec2, Vec3A, Vec4};
 use obvhs::{
     BvhBuildParams,
     aabb::Aabb,
@@ -40,6 +49,8 @@ use obvhs::{
     splits::split_aabbs_preset,
     triangle::Triangle,
 };
+
+use rayon::prelude::*;
 
 use crate::{FaceId, Scene};
 
@@ -144,7 +155,7 @@ pub const BOX_PAD_REL: f64 = 1e-6;
 /// a CwBvh, over primitive boxes padded by [`BOX_PAD_REL`] (the steps of obvhs's `build_cwbvh_from_tris`,
 /// which offers no padding).
 fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
-    let mut boxes: Vec<Aabb> = tris.iter().map(Triangle::aabb).collect();
+    let mut boxes: Vec<Aabb> = tris.par_iter().map(Triangle::aabb).collect();
     let mut indices: Vec<u32> = (0..tris.len() as u32).collect();
     if params.pre_split && !tris.is_empty() {
         let (largest, sum) = boxes.iter().fold((0f32, 0f32), |(l, s), b| {
@@ -160,10 +171,10 @@ fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
         );
     }
     let pad = Vec3A::splat((BOX_PAD_REL * NORMALISED_DIAGONAL) as f32);
-    for b in &mut boxes {
+    boxes.par_iter_mut().for_each(|b| {
         b.min -= pad;
         b.max += pad;
-    }
+    });
     let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
         params.ploc_search_distance,
         &boxes,
@@ -176,50 +187,212 @@ fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
     bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
 }
 
+/// Number of ray-counter slots ([`RayCounter`]); threads beyond this many share slots (still exact).
+const COUNTER_SLOTS: usize = 64;
+
+/// One counter slot, alone on its cache line pair (128 bytes: adjacent-line prefetchers fetch lines in pairs).
+#[derive(Default)]
+#[repr(align(128))]
+struct CounterSlot(AtomicU64);
+
+/// The slot of the calling thread: threads take slots in the order they first cast a ray.
+fn counter_slot() -> usize {
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    thread_local! {
+        static SLOT: usize = NEXT.fetch_add(1, Ordering::Relaxed) % COUNTER_SLOTS;
+    }
+    SLOT.with(|s| *s)
+}
+
+/// An exact count over all threads without a shared per-ray atomic: each thread adds (relaxed) to its own
+/// slot, which no other thread writes while fewer than [`COUNTER_SLOTS`] threads have cast rays, and the
+/// total is the sum of the slots. A shared counter costs a cache-line transfer between cores per ray; this
+/// one costs an uncontended add.
+struct RayCounter {
+    slots: Box<[CounterSlot]>,
+}
+
+impl RayCounter {
+    fn new() -> Self {
+        Self {
+            slots: (0..COUNTER_SLOTS).map(|_| CounterSlot::default()).collect(),
+        }
+    }
+
+    #[inline(always)]
+    fn add_one(&self) {
+        self.slots[counter_slot()].0.fetch_add(1, Ordering::Relaxed);
+    }
+
+    fn total(&self) -> u64 {
+        self.slots.iter().map(|s| s.0.load(Ordering::Relaxed)).sum()
+    }
+}
+
 /// The scene's acceleration structure and ray counter.
 pub struct Accel {
     bvh: CwBvh,
-    /// Triangles in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal.
-    tris: Vec<Triangle>,
-    tri_face: Vec<u32>,
+    /// Per BVH primitive slot (the order of `bvh.primitive_indices`, so that a leaf's triangles lie side by
+    /// side): the triangle in f32, normalised: (p − offset) × NORMALISED_DIAGONAL / diagonal, and its face.
+    slot_tri: Vec<FilterTriangle>,
+    /// Per slot: the f64 plane of the triangle: its first vertex (relative to `offset`) and unit normal.
+    slot_plane: Vec<[DVec3; 2]>,
+    /// Per triangle: its vertices.
     tri_verts: Vec<[u32; 3]>,
+    /// Bound on the rounding error of each f32 coordinate of an edge vector in `slot_tri`.
+    edge_err: f32,
+    /// Largest f32 coordinate magnitude of a vertex.
+    vert_max: f32,
     /// The scene's vertices in f64, relative to `offset`.
     verts: Vec<DVec3>,
     offset: DVec3,
     inv_scale: f64,
     tol: f64,
-    rays: AtomicU64,
+    rays: RayCounter,
     build_time: Duration,
 }
 
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("triangles", &self.tris.len())
+            .field("triangles", &self.tri_verts.len())
             .field("plane_tolerance", &self.tol)
             .finish()
     }
 }
 
-/// Loose f32 ray-triangle test (Möller & Trumbore 1997) with barycentric slack: true for every triangle the
-/// ray may hit within [0, tmax].
+/// A triangle for the f32 test: first vertex and the two edges from it (normalised coordinates), and its
+/// face, in one 48-byte record (the face's bits in the first vertex's fourth lane), so that the face check
+/// and the test read the same cache line.
+#[derive(Clone, Copy, Debug)]
+struct FilterTriangle {
+    v0_face: Vec4,
+    e1: Vec3A,
+    e2: Vec3A,
+}
+
+impl FilterTriangle {
+    #[inline(always)]
+    fn face(&self) -> usize {
+        self.v0_face.w.to_bits() as usize
+    }
+
+    #[inline(always)]
+    fn v0(&self) -> Vec3A {
+        Vec3A::from_vec4(self.v0_face)
+    }
+}
+
+/// What the f32 test concludes about a triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Filter {
+    /// The ray cannot hit it within [0, tmax] (the loose filter).
+    Miss,
+    /// The f64 test would find it missed: the ray's line passes farther than 2τ outside the triangle, and
+    /// its origin, if on the plane, farther than τ.
+    Outside,
+    /// The ray's line certainly crosses the triangle's interior (the f64 edge test would pass).
+    Inside,
+    /// The ray may hit it: f64 decides.
+    Unsure,
+}
+
+/// The f32 filter ray with what its error bounds need.
+#[derive(Clone, Copy, Debug)]
+struct FilterRay {
+    o: Vec3A,
+    d: Vec3A,
+    /// ‖d‖₁.
+    d_l1: f32,
+    /// Bound on the error of each coordinate of `o − v0` against the exact (f64) values, which also covers
+    /// the rounding of `o` onto the f64 ray's line.
+    tv_err: f32,
+}
+
+/// Unit roundoff of f32.
+const EPS32: f32 = f32::EPSILON / 2.0;
+
+/// Bound on the error of a triple product a · (b × c) evaluated in f32 from inputs whose coordinates are
+/// off: `moved` bounds how far the input errors move the exact product (each factor's largest coordinate
+/// error times the L1 norm of the cross product of the other two, |Δa · (b × c)| ≤ ‖Δa‖∞ ‖b × c‖₁), tripled;
+/// `abc` is the product of the three L1 norms, which bounds the sum of the magnitudes of its six terms, each
+/// evaluated with at most five roundings (Higham 2002, §3.1). Doubled for second-order terms and for the
+/// rounding of the bound itself.
 #[inline(always)]
-fn f32_filter(tri: &Triangle, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
-    let e1 = tri.v1 - tri.v0;
-    let e2 = tri.v2 - tri.v0;
+fn triple_err(moved: f32, abc: f32) -> f32 {
+    2.0 * (3.0 * moved + 5.0 * EPS32 * abc)
+}
+
+/// The f32 ray-triangle test (Möller & Trumbore 1997), deciding in f32 wherever conservative error bounds
+/// allow, so that f64 is needed only near a triangle's edges:
+///
+/// - [`Filter::Miss`] first wherever the earlier loose filter rejected (barycentric slack
+///   [`F32_FILTER_BARY`], t outside [0, tmax]), with the same arithmetic, so answers are unchanged.
+/// - Of the rest, with U = (o − v0) · (d × e2), V = d · ((o − v0) × e1), W = det − U − V (the scaled barycentrics, the
+///   edge functions of Woop, Benthin & Wald 2013 in Möller–Trumbore form) and bounds on their errors against
+///   exact arithmetic on the f64 scene (`triple_err`), det's sign being certain: [`Filter::Inside`] when all
+///   three certainly have det's sign (the exact line crosses the triangle's interior, so the f64 edge test
+///   would pass); missed when one certainly has the opposite sign by more than 2τ‖e‖₁, e the edge
+///   where it vanishes ([`Filter::Outside`]). The line then crosses the plane farther than 2τ outside that edge (a scaled
+///   barycentric is the distance from its edge × |cos θ| × |e|), and the origin, within τ/|cos θ| of the
+///   crossing when it lies on the plane, farther than τ: the f64 test finds neither inside.
+/// - [`Filter::Unsure`] otherwise: f64 decides.
+///
+/// `edge_err` bounds the coordinate errors of `e1` and `e2`; `tau` is τ in normalised units.
+#[inline(always)]
+fn f32_filter(tri: &FilterTriangle, ray: &FilterRay, tmax: f32, edge_err: f32, tau: f32) -> Filter {
+    let (o, d) = (ray.o, ray.d);
+    let (e1, e2) = (tri.e1, tri.e2);
     let pv = d.cross(e2);
     let det = e1.dot(pv);
     if det == 0.0 {
-        return false;
+        return Filter::Miss;
     }
     let inv = 1.0 / det;
-    let tv = o - tri.v0;
-    let u = tv.dot(pv) * inv;
+    let tv = o - tri.v0();
+    let big_u = tv.dot(pv);
+    let u = big_u * inv;
     let qv = tv.cross(e1);
-    let v = d.dot(qv) * inv;
+    let big_v = d.dot(qv);
+    let v = big_v * inv;
     let t = e2.dot(qv) * inv;
     let eps = F32_FILTER_BARY;
-    u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= 0.0 && t <= tmax
+    if !(u >= -eps && v >= -eps && u + v <= 1.0 + eps && t >= 0.0 && t <= tmax) {
+        return Filter::Miss;
+    }
+    let (n1, n2, nt, nd) = (
+        e1.abs().element_sum(),
+        e2.abs().element_sum(),
+        tv.abs().element_sum(),
+        ray.d_l1,
+    );
+    let (de, dt, dd) = (edge_err, ray.tv_err, 2.0 * EPS32);
+    // U = e2 · ((o − v0) × d) and V = e1 · (d × (o − v0)): the edges' errors move them by at most their
+    // coordinate error times ‖(o − v0) × d‖₁, small for a triangle near the line however far from the
+    // origin (bounded here from its f32 value, its rounding and its inputs' errors).
+    let w = tv.cross(d).abs().element_sum() + 4.0 * EPS32 * nt * nd + 2.0 * (dt * nd + nt * dd);
+    let err_det = triple_err(de * nd * n2 + dd * n1 * n2 + de * n1 * nd, n1 * nd * n2);
+    let err_u = triple_err(dt * nd * n2 + dd * nt * n2 + de * w, nt * nd * n2);
+    let err_v = triple_err(dd * nt * n1 + dt * nd * n1 + de * w, nd * nt * n1);
+    let big_w = det - big_u - big_v;
+    let err_w = err_det + err_u + err_v + 4.0 * EPS32 * (det.abs() + big_u.abs() + big_v.abs());
+    if det.abs() <= err_det {
+        return Filter::Unsure;
+    }
+    let s = det.signum();
+    let (su, sv, sw) = (s * big_u, s * big_v, s * big_w);
+    if su > err_u && sv > err_v && sw > err_w {
+        return Filter::Inside;
+    }
+    // Twice τ, and padded for the rounding of the edges' norms.
+    let tau2 = 2.0 * tau * (1.0 + 16.0 * EPS32);
+    if su < -(err_u + tau2 * (n2 + 3.0 * de))
+        || sv < -(err_v + tau2 * (n1 + 3.0 * de))
+        || sw < -(err_w + tau2 * (n1 + n2 + 6.0 * de))
+    {
+        return Filter::Outside;
+    }
+    Filter::Unsure
 }
 
 impl Accel {
@@ -236,8 +409,12 @@ impl Accel {
         let inv_scale = NORMALISED_DIAGONAL / scale;
         let verts: Vec<DVec3> = scene.vertices.iter().map(|&p| p - offset).collect();
         let to32 = |i: u32| Vec3A::from((verts[i as usize] * inv_scale).as_vec3());
+        let vert_max = verts
+            .iter()
+            .map(|&v| (v * inv_scale).abs().max_element())
+            .fold(0.0, f64::max) as f32;
         let mut tris = Vec::with_capacity(scene.faces.len() * 2);
-        let mut tri_face = Vec::with_capacity(scene.faces.len() * 2);
+        let mut tri_face: Vec<u32> = Vec::with_capacity(scene.faces.len() * 2);
         let mut tri_verts = Vec::with_capacity(scene.faces.len() * 2);
         for (f, face) in scene.faces.iter().enumerate() {
             let idx = face.indices;
@@ -257,17 +434,41 @@ impl Accel {
         }
         let start = std::time::Instant::now();
         let bvh = build_bvh(&tris, preset.params());
+        let slots = &bvh.primitive_indices;
+        let slot_tri = slots
+            .par_iter()
+            .map(|&k| {
+                let t = &tris[k as usize];
+                FilterTriangle {
+                    v0_face: t.v0.extend(f32::from_bits(tri_face[k as usize])),
+                    e1: t.v1 - t.v0,
+                    e2: t.v2 - t.v0,
+                }
+            })
+            .collect();
+        let slot_plane = slots
+            .par_iter()
+            .map(|&k| {
+                let [a, b, c] = tri_verts[k as usize].map(|i: u32| verts[i as usize]);
+                [a, (b - a).cross(c - a).normalize_or_zero()]
+            })
+            .collect();
+        // The BVH and the leaf-ordered triangle data it is traversed with.
         let build_time = start.elapsed();
         Self {
             bvh,
-            tris,
-            tri_face,
+            slot_tri,
+            slot_plane,
             tri_verts,
+            // Each coordinate of v0, v1, v2 is rounded once from f64 (relative error EPS32, coordinates at
+            // most vert_max), and the subtraction once more (|e| ≤ 2 vert_max).
+            edge_err: 4.0 * EPS32 * vert_max,
+            vert_max,
             verts,
             offset,
             inv_scale,
             tol: PLANE_TOL_REL * scale,
-            rays: AtomicU64::new(0),
+            rays: RayCounter::new(),
             build_time,
         }
     }
@@ -277,31 +478,34 @@ impl Accel {
         self.tol
     }
 
-    /// Wall time the BVH build took.
+    /// Wall time the BVH build took (with the leaf-ordered triangle data; not the scene conversion before).
     pub fn build_time(&self) -> Duration {
         self.build_time
     }
 
-    /// Rays cast so far, over all threads.
+    /// Rays cast so far, over all threads: exact once the casting threads' work has been joined (rayon's
+    /// `join`, `scope` and parallel iterators do), and the same for any number of threads.
     pub fn rays_cast(&self) -> u64 {
-        self.rays.load(Ordering::Relaxed)
+        self.rays.total()
     }
 
     /// Number of triangles in the BVH (quads count two).
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.tri_verts.len()
     }
 
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.bvh.nodes.len() * 80
             + self.bvh.primitive_indices.len() * 4
-            + self.tris.len() * (size_of::<Triangle>() + 4 + 12)
+            + self.slot_tri.len() * (size_of::<FilterTriangle>() + size_of::<[DVec3; 2]>())
+            + self.tri_verts.len() * size_of::<[u32; 3]>()
+            + COUNTER_SLOTS * size_of::<CounterSlot>()
             + self.verts.len() * size_of::<DVec3>()
     }
 
     /// The f32 filter ray from `o` (relative to `offset`) along `dir`, reaching `tmax` scene units.
-    fn filter_ray(&self, o: DVec3, dir: DVec3, tmax: f64) -> BvhRay {
+    fn filter_ray(&self, o: DVec3, dir: DVec3, tmax: f64) -> (BvhRay, FilterRay) {
         let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
         let origin = Vec3A::from((o * self.inv_scale - shift * dir).as_vec3());
         let tmax = if tmax.is_finite() {
@@ -309,13 +513,24 @@ impl Accel {
         } else {
             f32::INFINITY
         };
-        BvhRay::new(origin, Vec3A::from(dir.as_vec3()), 0.0, tmax)
+        let ray = BvhRay::new(origin, Vec3A::from(dir.as_vec3()), 0.0, tmax);
+        // o − v0: o rounded once (plus the f64 shift and scaling, far below f32's rounding), v0 once, and
+        // the difference once (|o − v0| ≤ |o| + vert_max).
+        let o_max = origin.abs().max_element();
+        let filter = FilterRay {
+            o: ray.origin,
+            d: ray.direction,
+            d_l1: ray.direction.abs().element_sum(),
+            tv_err: 4.0 * EPS32 * (o_max + self.vert_max),
+        };
+        (ray, filter)
     }
 
-    fn triangle(&self, tri: usize) -> (DVec3, DVec3, DVec3, DVec3) {
-        let [a, b, c] = self.tri_verts[tri].map(|i| self.verts[i as usize]);
-        let n = (b - a).cross(c - a).normalize_or_zero();
-        (a, b, c, n)
+    /// The vertices b, c of the triangle in `slot` (its first vertex and normal are in `slot_plane`).
+    fn far_vertices(&self, slot: usize) -> (DVec3, DVec3) {
+        let tri = self.bvh.primitive_indices[slot] as usize;
+        let [_, b, c] = self.tri_verts[tri];
+        (self.verts[b as usize], self.verts[c as usize])
     }
 
     /// Whether `x` (in the plane of triangle a, b, c with unit normal n) lies inside it within τ.
@@ -326,9 +541,11 @@ impl Accel {
         })
     }
 
-    /// The f64 hit distance of the ray (origin `o` relative to `offset`, unit `dir`) on triangle `tri`.
-    fn exact_hit(&self, tri: usize, o: DVec3, dir: DVec3) -> Option<f64> {
-        let (a, b, c, n) = self.triangle(tri);
+    /// The f64 hit distance of the ray (origin `o` relative to `offset`, unit `dir`) on the triangle in
+    /// `slot`; `inside` is true when the f32 test has proved that the ray's line crosses its interior.
+    #[inline(always)]
+    fn exact_hit(&self, slot: usize, o: DVec3, dir: DVec3, inside: bool) -> Option<f64> {
+        let [a, n] = self.slot_plane[slot];
         if n == DVec3::ZERO {
             return None;
         }
@@ -337,10 +554,22 @@ impl Accel {
         if s.abs() <= self.tol {
             // The origin lies on this triangle's plane: hit at once only if the ray enters its back from a
             // point of the (closed) triangle.
-            return (dn < 0.0 && self.inside(a, b, c, n, o)).then_some(0.0);
+            if dn >= 0.0 {
+                return None;
+            }
+            let (b, c) = self.far_vertices(slot);
+            return self.inside(a, b, c, n, o).then_some(0.0);
         }
         if s * dn < 0.0 {
             let t = -s / dn;
+            if inside {
+                debug_assert!({
+                    let (b, c) = self.far_vertices(slot);
+                    self.inside(a, b, c, n, o + t * dir)
+                });
+                return Some(t);
+            }
+            let (b, c) = self.far_vertices(slot);
             return self.inside(a, b, c, n, o + t * dir).then_some(t);
         }
         None
@@ -379,9 +608,10 @@ impl Accel {
             );
             return (None, cost);
         }
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.rays.add_one();
         let o = origin - self.offset;
-        let mut ray = self.filter_ray(o, dir, tmax);
+        let (mut ray, fray) = self.filter_ray(o, dir, tmax);
+        let tau32 = (PLANE_TOL_REL * NORMALISED_DIAGONAL) as f32;
         let shift = F32_FILTER_SHIFT * NORMALISED_DIAGONAL;
         let mut best: Option<(usize, f64)> = None;
         // obvhs's closest-hit traversal (its `traverse!` macro, as in `CwBvh::ray_traverse`), counting the
@@ -398,11 +628,23 @@ impl Accel {
             },
             {
                 cost.triangles += 1;
-                let tri = self.bvh.primitive_indices[state.primitive_id as usize] as usize;
-                let face = self.tri_face[tri] as usize;
-                let candidate = face != skip
-                    && f32_filter(&self.tris[tri], ray.origin, ray.direction, ray.tmax);
-                if let Some(t) = candidate.then(|| self.exact_hit(tri, o, dir)).flatten() {
+                let slot = state.primitive_id as usize;
+                let tri = &self.slot_tri[slot];
+                let face = tri.face();
+                let filter = if face == skip {
+                    Filter::Miss
+                } else {
+                    f32_filter(tri, &fray, ray.tmax, self.edge_err, tau32)
+                };
+                let hit = match filter {
+                    Filter::Miss => None,
+                    Filter::Outside => {
+                        debug_assert!(self.exact_hit(slot, o, dir, false).is_none());
+                        None
+                    }
+                    f => self.exact_hit(slot, o, dir, f == Filter::Inside),
+                };
+                if let Some(t) = hit {
                     let better = match best {
                         None => t <= tmax,
                         Some((_, bt)) => t < bt,
@@ -454,10 +696,11 @@ impl Accel {
             debug_assert!(len == 0.0, "segment with non-finite ends {p:?} {q:?}");
             return (true, cost);
         }
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.rays.add_one();
         let dir = d / len;
         let (p, q) = (p - self.offset, q - self.offset);
-        let ray = self.filter_ray(p, dir, len);
+        let (ray, fray) = self.filter_ray(p, dir, len);
+        let tau32 = (PLANE_TOL_REL * NORMALISED_DIAGONAL) as f32;
         let tol = self.tol;
         let mut visible = true;
         // obvhs's any-hit traversal (as in `CwBvh::ray_traverse_miss`), counting nodes and triangles.
@@ -474,17 +717,35 @@ impl Accel {
                 },
                 {
                     cost.triangles += 1;
-                    let tri = self.bvh.primitive_indices[state.primitive_id as usize] as usize;
-                    let f = self.tri_face[tri] as usize;
-                    if f != fp
-                        && f != fq
-                        && f32_filter(&self.tris[tri], ray.origin, ray.direction, ray.tmax)
-                    {
-                        let (a, b, c, n) = self.triangle(tri);
+                    let slot = state.primitive_id as usize;
+                    let tri = &self.slot_tri[slot];
+                    let f = tri.face();
+                    let filter = if f == fp || f == fq {
+                        Filter::Miss
+                    } else {
+                        f32_filter(tri, &fray, ray.tmax, self.edge_err, tau32)
+                    };
+                    if filter == Filter::Outside {
+                        debug_assert!({
+                            let [a, n] = self.slot_plane[slot];
+                            let (b, c) = self.far_vertices(slot);
+                            let (sp, sq) = (n.dot(p - a), n.dot(q - a));
+                            !((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
+                                || !self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                        });
+                    } else if filter != Filter::Miss {
+                        let [a, n] = self.slot_plane[slot];
                         let (sp, sq) = (n.dot(p - a), n.dot(q - a));
                         // Only a plane crossed between the ends, both ends clear of it, can occlude.
                         if ((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
-                            && self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                            && ({
+                                let check = || {
+                                    let (b, c) = self.far_vertices(slot);
+                                    self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+                                };
+                                debug_assert!(filter != Filter::Inside || check());
+                                filter == Filter::Inside || check()
+                            })
                         {
                             visible = false;
                             break 'traversal;
@@ -494,5 +755,53 @@ impl Accel {
             );
         }
         (visible, cost)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling;
+
+    /// obvhs's parallel build (its `parallel` feature) splits work by the number of rayon threads; the BVH,
+    /// and with it the order in which ties between equally distant hits (rays through shared edges) are
+    /// broken, must not depend on it.
+    #[test]
+    fn bvh_is_the_same_on_any_number_of_threads() {
+        // More primitives than every parallel threshold of obvhs 0.4's PLOC build (4·10³ for the neighbour
+        // search, 3·10⁵ for the merge costs, 5·10⁵ for the leaf setup); one triangle in eight repeated
+        // exactly, so that Morton codes tie.
+        let mut r = sampling::rng(5, 0);
+        let mut tris: Vec<Triangle> = Vec::new();
+        while tris.len() < 520_000 {
+            let mut p = || {
+                Vec3A::new(
+                    sampling::uniform(&mut r) as f32,
+                    sampling::uniform(&mut r) as f32,
+                    sampling::uniform(&mut r) as f32,
+                )
+            };
+            let c = 500.0 * p();
+            let t = Triangle {
+                v0: c,
+                v1: c + p(),
+                v2: c + p(),
+            };
+            tris.push(t);
+            if tris.len().is_multiple_of(8) {
+                tris.push(t);
+            }
+        }
+        // The default preset (the others run the same parallel stages with other parameters).
+        let build = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| build_bvh(&tris, AccelPreset::Fast.params()))
+        };
+        let one = build(1);
+        assert!(one == build(2), "1 and 2 threads differ");
+        assert!(one == build(3), "1 and 3 threads differ");
     }
 }

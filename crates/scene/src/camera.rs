@@ -61,14 +61,50 @@ impl Camera {
 
     /// The ray through continuous pixel coordinates (x right, y down; pixel (i, j) covers [i, i+1) × [j, j+1)).
     pub fn ray(&self, x: f64, y: f64) -> Ray {
+        self.frame().ray(x, y)
+    }
+
+    /// The camera's orthonormal frame and image-plane extent, computed once for casting many rays.
+    pub fn frame(&self) -> CameraFrame {
         let w = (self.target - self.eye).normalize();
         let u = w.cross(self.up).normalize();
         let v = u.cross(w);
         let half_h = (0.5 * self.fov_y_deg.to_radians()).tan();
         let half_w = half_h * self.width as f64 / self.height as f64;
-        let sx = (2.0 * x / self.width as f64 - 1.0) * half_w;
-        let sy = (1.0 - 2.0 * y / self.height as f64) * half_h;
-        Ray::new(self.eye, (w + sx * u + sy * v).normalize())
+        CameraFrame {
+            eye: self.eye,
+            w,
+            u,
+            v,
+            half_w,
+            half_h,
+            width: self.width as f64,
+            height: self.height as f64,
+        }
+    }
+}
+
+/// A [`Camera`]'s frame (view direction w, right u, up v), half extents of its image plane at distance 1 and
+/// image size: [`CameraFrame::ray`] gives [`Camera::ray`]'s rays, bit for bit, without recomputing them.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraFrame {
+    eye: DVec3,
+    w: DVec3,
+    u: DVec3,
+    v: DVec3,
+    half_w: f64,
+    half_h: f64,
+    width: f64,
+    height: f64,
+}
+
+impl CameraFrame {
+    /// The ray through continuous pixel coordinates (see [`Camera::ray`]).
+    #[inline]
+    pub fn ray(&self, x: f64, y: f64) -> Ray {
+        let sx = (2.0 * x / self.width - 1.0) * self.half_w;
+        let sy = (1.0 - 2.0 * y / self.height) * self.half_h;
+        Ray::new(self.eye, (self.w + sx * self.u + sy * self.v).normalize())
     }
 }
 

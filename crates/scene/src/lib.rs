@@ -23,13 +23,13 @@ pub mod scene;
 pub mod solver;
 
 pub use accel::{Accel, AccelPreset, Hit, Ray};
-pub use camera::{Camera, Image, render_solution};
+pub use camera::{Camera, CameraFrame, Image, render_solution};
 pub use elements::{Element, ElementMesh, default_element_size};
 pub use error::{SceneError, SolveError};
 pub use eval_points::{EvalPoint, evaluation_points};
 pub use io::load_scene;
 pub use params::MethodParams;
-pub use polygon::Polygon;
+pub use polygon::{AreaSampler, Polygon};
 pub use scene::{Face, FaceId, Material, Scene, SceneBuilder, SceneWarnings};
 pub use solver::{PerFaceSolution, Solution, Solver, Stats, Step};
 

@@ -129,17 +129,7 @@ impl Polygon {
 
     /// A point distributed uniformly over the polygon's area, from two numbers in [0,1).
     pub fn sample_uniform(&self, u1: f64, u2: f64) -> DVec3 {
-        let v = &self.verts;
-        if self.n == 3 {
-            return sample_triangle(v[0], v[1], v[2], u1, u2);
-        }
-        let (a1, a2) = self.split_areas();
-        let p1 = if a1 + a2 > 0.0 { a1 / (a1 + a2) } else { 0.5 };
-        if u1 < p1 {
-            sample_triangle(v[0], v[1], v[2], u1 / p1, u2)
-        } else {
-            sample_triangle(v[0], v[2], v[3], ((u1 - p1) / (1.0 - p1)).min(1.0), u2)
-        }
+        AreaSampler::new(*self).sample(u1, u2)
     }
 
     /// A point from parameters (s, t) in [0,1]²: bilinear over a quad, the square-root map over a triangle.
@@ -289,6 +279,43 @@ impl Polygon {
             }
         }
         true
+    }
+}
+
+/// [`Polygon::sample_uniform`] with the choice between a quad's two triangles (probability proportional to
+/// area) computed once, for drawing many points from one polygon (emitter sampling): the same points, bit
+/// for bit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaSampler {
+    poly: Polygon,
+    /// Probability of the first triangle (v0, v1, v2) of a quad; 1 for a triangle.
+    p1: f64,
+}
+
+impl AreaSampler {
+    /// The sampler of `poly`.
+    pub fn new(poly: Polygon) -> Self {
+        let p1 = if poly.n == 3 {
+            1.0
+        } else {
+            let (a1, a2) = poly.split_areas();
+            if a1 + a2 > 0.0 { a1 / (a1 + a2) } else { 0.5 }
+        };
+        Self { poly, p1 }
+    }
+
+    /// A point distributed uniformly over the polygon's area, from two numbers in [0,1).
+    #[inline]
+    pub fn sample(&self, u1: f64, u2: f64) -> DVec3 {
+        let (v, p1) = (&self.poly.verts, self.p1);
+        if self.poly.n == 3 {
+            return sample_triangle(v[0], v[1], v[2], u1, u2);
+        }
+        if u1 < p1 {
+            sample_triangle(v[0], v[1], v[2], u1 / p1, u2)
+        } else {
+            sample_triangle(v[0], v[2], v[3], ((u1 - p1) / (1.0 - p1)).min(1.0), u2)
+        }
     }
 }
 

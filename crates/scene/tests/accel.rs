@@ -709,3 +709,72 @@ fn answers_are_the_same_from_rayon_threads() {
         "{blocked}"
     );
 }
+
+/// Random triangles of every shape (slivers, triangles 1e-5 of the scene) hit by rays aimed at their
+/// vertices and at points on and beside their edges, from every angle down to grazing. In debug builds
+/// `Accel` checks each decision its f32 test takes alone (inside, or outside by more than the tolerance)
+/// against the f64 test it skips; here the answers must also match brute force away from edges.
+#[test]
+fn f32_decisions_agree_with_f64_near_edges_and_at_grazing_angles() {
+    let mut r = sampling::rng(11, 0);
+    let mut b = SceneBuilder::new("slivers");
+    let m = b
+        .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("valid"))
+        .expect("material");
+    let mut tris = Vec::new();
+    while tris.len() < 300 {
+        let c = dvec3(u(&mut r), u(&mut r), u(&mut r));
+        let size = [0.2, 1e-2, 1e-5][tris.len() % 3];
+        let e1 = size * random_dir(&mut r);
+        // Every fourth a sliver: the third vertex 1e-3 of the size off the first edge.
+        let thin = if tris.len() % 4 == 0 { 1e-3 } else { 1.0 };
+        let e2 = 0.5 * e1 + thin * size * random_dir(&mut r);
+        let t = [c, c + e1, c + e2];
+        if b.add_polygon_points(&t, m, "test").is_ok() {
+            tris.push(t);
+        }
+    }
+    let scene = b.build().expect("scene");
+    let accel = Accel::new(&scene);
+    let mut cast = 0u64;
+    for (k, t) in tris.iter().enumerate() {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        for j in 0..40 {
+            // A vertex, a point on an edge, or a point beside an edge by a few tolerances or ulps.
+            let (a, c) = (t[j % 3], t[(j + 1) % 3]);
+            let s = u(&mut r);
+            let beside = [0.0, 1e-16, 1e-12, 3e-9, 1e-7][j % 5];
+            let edge_out = (c - a).cross(n).normalize();
+            let target = if j % 7 == 0 {
+                a
+            } else {
+                a + s * (c - a) + beside * edge_out
+            };
+            // From any direction, every eighth grazing the plane.
+            let mut d = random_dir(&mut r);
+            if j % 8 == 0 {
+                d = (d - d.dot(n) * n).normalize() + 1e-6 * u(&mut r) * n;
+                d = d.normalize();
+            }
+            let o = target - 0.5 * d;
+            let h = accel.intersect(&Ray::new(o, d));
+            cast += 1;
+            if let (Some(h), Some((f, t_bf))) = (h, brute_force(&scene, o, d, 0.0, usize::MAX)) {
+                // Away from both faces' edges the nearest face is unambiguous.
+                let clear =
+                    |face: FaceId, x: DVec3| distance_to_boundary(&scene.polygon(face), x) > 1e-6;
+                if clear(f, o + t_bf * d) && clear(h.face, h.point) {
+                    assert_eq!(
+                        h.face, f,
+                        "triangle {k} ray {j}: {h:?} brute force t {t_bf}"
+                    );
+                    assert!((h.t - t_bf).abs() < 1e-9, "triangle {k} ray {j}");
+                }
+            }
+            accel.visible(o, target + 0.5 * d);
+            accel.visible(o, target);
+            cast += 2;
+        }
+    }
+    assert_eq!(accel.rays_cast(), cast);
+}
