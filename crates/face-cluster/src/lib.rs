@@ -17,9 +17,10 @@
 //!
 //! | parameter | default | meaning |
 //! |---|---|---|
-//! | `planarity-weight` | 1 | weight of E_fit (mean squared distance to the fitted plane over area) |
+//! | `planarity-weight` | 1 | weight of E_fit (mean squared distance to the fitted plane over the mesh's mean face area) |
 //! | `orientation-weight` | 1 | weight of E_dir (area-weighted (1 − n̄·n_f)²) |
 //! | `shape-weight` | 1 | weight of E_shape (1 − max(γ₁, γ₂)/γ, γ = perimeter²/area) |
+//! | `balance-weight` | 1 | weight of E_bal = \|A₁ − A₂\|/(A₁ + A₂) (radlab's addition: keeps the tree O(log k) deep) |
 //! | `samples-per-node` | 4 | visibility sample points per node |
 //! | `seed` | 1 | seed of the sample points |
 //!

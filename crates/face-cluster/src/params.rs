@@ -2,25 +2,29 @@
 //! merge-cost terms, the number of visibility sample points per node and their seed.
 //!
 //! The cost of merging regions R₁ and R₂ into R (see [`crate::contraction`]) is
-//! w_fit · E_fit + w_dir · E_dir + w_shape · E_shape, every term dimensionless so the merge order does not
+//! w_fit · E_fit + w_dir · E_dir + w_shape · E_shape + w_bal · E_bal, every term dimensionless so the merge order does not
 //! change when the scene is scaled.
 
 use serde::{Deserialize, Serialize};
 
 use crate::FaceClusterError;
 
-/// How a face-cluster hierarchy is built. Defaults: all three weights 1, 4 samples per node, seed 1.
+/// How a face-cluster hierarchy is built. Defaults: all four weights 1, 4 samples per node, seed 1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case", default, deny_unknown_fields)]
 pub struct FaceClusterParams {
     /// Weight of planarity, E_fit = (mean squared distance of the region's vertices to their least-squares
-    /// plane) / (region area). Default 1.
+    /// plane) / (mean face area of its mesh part). Default 1.
     pub planarity_weight: f64,
     /// Weight of orientation, E_dir = Σ A_f (1 − n̄·n_f)² / Σ A_f with n̄ the region's mean normal. Default 1.
     pub orientation_weight: f64,
     /// Weight of shape, E_shape = 1 − max(γ₁, γ₂)/γ with γ = perimeter²/area (negative when the merged
     /// region is more compact than its rounder part). Default 1.
     pub shape_weight: f64,
+    /// Weight of balance, E_bal = |A₁ − A₂| / (A₁ + A₂): radlab's addition to Garland's terms, so regions grow
+    /// in step instead of one region taking in its neighbours a face at a time (a deep tree, and a slower
+    /// contraction). 0 gives Garland's cost alone. Default 1.
+    pub balance_weight: f64,
     /// Representative points per node for visibility rays, 1..=64. Default 4.
     pub samples_per_node: usize,
     /// Seed of the sample points. Default 1.
@@ -33,6 +37,7 @@ impl Default for FaceClusterParams {
             planarity_weight: 1.0,
             orientation_weight: 1.0,
             shape_weight: 1.0,
+            balance_weight: 1.0,
             samples_per_node: 4,
             seed: 1,
         }
@@ -49,6 +54,7 @@ impl FaceClusterParams {
             ("planarity-weight", self.planarity_weight),
             ("orientation-weight", self.orientation_weight),
             ("shape-weight", self.shape_weight),
+            ("balance-weight", self.balance_weight),
         ] {
             if !(w.is_finite() && w >= 0.0) {
                 return Err(FaceClusterError::InvalidParams {
