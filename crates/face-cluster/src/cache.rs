@@ -107,9 +107,7 @@ impl FaceClusterTree {
         }
         let mut found: Digest = [0; 32];
         found.copy_from_slice(&bytes[12..HEADER_LEN]);
-        if let Some(want) = expected
-            && *want != found
-        {
+        if let Some(want) = expected.filter(|w| **w != found) {
             return Err(FaceClusterError::CacheStale {
                 found: digest_hex(&found),
                 expected: digest_hex(want),

@@ -38,8 +38,11 @@ fn scaled(scene: &Scene, s: f64) -> Scene {
     b.build().expect("faces")
 }
 
-/// The tree's shape: per node (first face, face count, children, parent) and the face order.
-fn shape(t: &FaceClusterTree) -> (Vec<(usize, usize, usize, Option<usize>)>, Vec<u32>) {
+/// Per node: first face, face count, first child, parent.
+type NodeShape = (usize, usize, usize, Option<usize>);
+
+/// The tree's shape: every node's [`NodeShape`] and the face order.
+fn shape(t: &FaceClusterTree) -> (Vec<NodeShape>, Vec<u32>) {
     let nodes = t
         .nodes()
         .iter()

@@ -126,7 +126,6 @@ impl Scene {
 mod tests {
     use glam::dvec3;
 
-    use super::*;
     use crate::{Material, SceneBuilder};
 
     #[test]
