@@ -17,12 +17,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let tree = FaceClusterTree::build(&scene, &params)?;
     let s = tree.stats();
-    let mut depth = vec![0usize; tree.nodes().len()];
-    for (i, n) in tree.nodes().iter().enumerate() {
-        for c in n.children() {
-            depth[c] = depth[i] + 1;
-        }
-    }
     println!(
         "{spec}: {} faces, {} nodes, {} roots, {} dual / {} boundary / {} non-manifold edges, {} queue pushes, \
          {} stale pops, depth {}, {:.1} MiB held, cache {:.1} MiB",
@@ -34,7 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.non_manifold_edges,
         s.queue_pushes,
         s.stale_pops,
-        depth.iter().max().unwrap_or(&0),
+        tree.depth(),
         tree.bytes() as f64 / (1 << 20) as f64,
         tree.to_bytes()?.len() as f64 / (1 << 20) as f64,
     );

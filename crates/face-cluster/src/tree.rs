@@ -285,6 +285,17 @@ impl FaceClusterTree {
         &self.stats
     }
 
+    /// The number of edges on the longest path from a root to a leaf (0 when every root is a leaf).
+    pub fn depth(&self) -> usize {
+        let mut depth = vec![0usize; self.nodes.len()];
+        for (i, n) in self.nodes.iter().enumerate() {
+            for c in n.children() {
+                depth[c] = depth[i] + 1;
+            }
+        }
+        depth.into_iter().max().unwrap_or(0)
+    }
+
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node>()

@@ -108,6 +108,24 @@ fn layout_is_contiguous_and_nested() {
     }
 }
 
+/// Greedy contraction is not balanced by construction, but regions growing in step keep the tree within a
+/// small factor of a balanced tree's log₂ k; a region taking in its neighbours one face at a time (the
+/// failure the balance and planarity normalisation prevent) makes it grow like √k or k instead.
+#[test]
+fn trees_stay_shallow() {
+    for scene in [bumpy(), terrain()] {
+        let t = build(&scene);
+        let log2k = (scene.face_count() as f64).log2();
+        assert!(
+            (t.depth() as f64) <= 4.0 * log2k,
+            "{}: depth {} for {} faces",
+            scene.name,
+            t.depth(),
+            scene.face_count()
+        );
+    }
+}
+
 /// Σ (E_i + ρ_i n_i·e) A_i n_i over a node's faces equals p_E + M e when every n_i·e ≥ 0 (Willmott et al.
 /// 1999), at every node whose normal cone is narrower than a hemisphere, for random such e.
 #[test]
