@@ -154,6 +154,10 @@ impl FaceClusterTree {
             return Err("more roots than nodes".into());
         }
         for (i, node) in self.nodes.iter().enumerate() {
+            let (c_end, f_end) = node.raw_ends();
+            if c_end > n as u64 || f_end > k as u64 {
+                return Err(format!("node {i} points outside the tree"));
+            }
             let c = node.children();
             let f = node.faces();
             let parent_ok = node.parent().is_none_or(|p| p < i);

@@ -84,6 +84,14 @@ impl Node {
         std::array::from_fn(|c| self.p_e[c] + self.m[c].mul_vec(e[c]))
     }
 
+    /// Ends of the child and face ranges without overflow (for checking a decoded cache).
+    pub(crate) fn raw_ends(&self) -> (u64, u64) {
+        (
+            u64::from(self.first_child) + u64::from(self.child_count),
+            u64::from(self.first_face) + u64::from(self.face_count),
+        )
+    }
+
     /// The fitted plane's unit normal (the box's last axis).
     pub fn normal(&self) -> DVec3 {
         self.obb.axes[2]
