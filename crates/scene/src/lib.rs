@@ -11,6 +11,7 @@
 pub mod accel;
 pub mod builtin;
 pub mod camera;
+pub mod edge_adjacency;
 pub mod elements;
 pub mod error;
 pub mod eval_points;
@@ -24,6 +25,7 @@ pub mod solver;
 
 pub use accel::{Accel, AccelPreset, Hit, Ray};
 pub use camera::{Camera, CameraFrame, Image, render_solution};
+pub use edge_adjacency::{EdgeAdjacency, MeshEdge};
 pub use elements::{Element, ElementMesh, default_element_size};
 pub use error::{SceneError, SolveError};
 pub use eval_points::{EvalPoint, evaluation_points};

@@ -974,3 +974,30 @@ fn the_watertightness_check_catches_an_open_surface() {
     let s = load_scene("builtin:parallel-squares").expect("builds");
     assert_watertight(&s, 0..s.face_count());
 }
+
+/// A unit square in two `g` groups (two triangles each), with its top-right corner repeated as an extra `v`
+/// line: tobj re-indexes vertices per group, and the loader welds equal positions back into one index, so
+/// the faces on both sides of the group boundary share their edge.
+#[test]
+fn obj_groups_keep_connectivity_by_welding_equal_positions() {
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nv 1 1 -0\n\
+               g left\nf 1 2 3\nf 1 3 4\ng right\nf 2 5 6\nf 2 6 7\n";
+    let s = load_files(&[("groups.obj", obj.as_bytes())]).expect("loads");
+    assert_eq!(s.face_count(), 4);
+    // 6 distinct positions (−0 welds with +0), so the right group's two triangles meet the left one's.
+    assert_eq!(s.vertices.len(), 6);
+    let adj = s.edge_adjacency();
+    // A 2 × 1 strip of four triangles: 9 edges, 6 on the boundary, 3 shared by exactly two faces.
+    assert_eq!(adj.edge_count(), 9);
+    assert_eq!(adj.boundary_edge_count(), 6);
+    assert_eq!(adj.non_manifold_edge_count(), 0);
+    let pairs: Vec<(FaceId, FaceId)> = adj.manifold_pairs().map(|(_, a, b)| (a, b)).collect();
+    assert_eq!(pairs.len(), 3);
+    // The edge between the groups, x = 1, joins a face of each group.
+    let across = adj
+        .edges()
+        .find(|e| e.vertices.iter().all(|&v| s.vertices[v as usize].x == 1.0))
+        .expect("the shared edge x = 1");
+    assert_eq!(across.faces.len(), 2);
+    assert!(across.faces[0] < 2 && across.faces[1] >= 2, "{across:?}");
+}

@@ -10,8 +10,13 @@
 //! tobj reports no line numbers, so this reader counts the lines tobj has consumed when it fails, and scans
 //! the file itself to name the line of a non-finite vertex or an out-of-range face index. Positions and
 //! colours are read by tobj in double precision (its `use_f64` feature).
+//!
+//! tobj re-indexes vertices per `o`/`g` group and per `usemtl` run; this reader welds exactly equal positions
+//! across the whole file (−0.0 and +0.0 alike), so a mesh split into groups keeps its connectivity: faces of
+//! different groups that share an edge share its two vertex indices in the [`crate::Scene`].
 
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::io::{BufRead, Read};
 use std::path::Path;
 
@@ -242,15 +247,27 @@ pub fn read_obj(path: &Path) -> Result<PolygonMesh, SceneError> {
         mesh.materials.push(Material::new(name, rho, e)?);
     }
     let mut short_faces = 0usize;
+    // tobj gives each `o`/`g` group (and each `usemtl` run) its own vertex array, so a vertex shared across
+    // groups arrives once per group. Welding exactly equal positions over the whole file gives them one index
+    // again, so faces on both sides of a group boundary share their edge (mesh connectivity survives).
+    let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut local: Vec<u32> = Vec::new();
     for model in &models {
         let m = &model.mesh;
-        let base = mesh.positions.len() as u32;
+        local.clear();
         for p in m.positions.chunks_exact(3) {
             let v = DVec3::new(p[0], p[1], p[2]);
             if !v.is_finite() {
                 return Err(non_finite_vertex(path, &bytes));
             }
-            mesh.positions.push(v);
+            // + 0.0 turns −0.0 into +0.0, so the two zeros weld.
+            let key = (v + DVec3::ZERO).to_array().map(f64::to_bits);
+            let next = mesh.positions.len() as u32;
+            let id = *welded.entry(key).or_insert(next);
+            if id == next {
+                mesh.positions.push(v);
+            }
+            local.push(id);
         }
         let material = match m.material_id {
             Some(id) if id < mesh.materials.len() => id as u32,
@@ -281,7 +298,16 @@ pub fn read_obj(path: &Path) -> Result<PolygonMesh, SceneError> {
                 mesh.notes.default_material_faces += 1;
             }
             idx.clear();
-            idx.extend(face.iter().map(|&i| base + i));
+            for &i in face {
+                let Some(&v) = local.get(i as usize) else {
+                    return Err(parse_error(
+                        path,
+                        0,
+                        "a face refers to a vertex its group does not have (is the file cut short?)",
+                    ));
+                };
+                idx.push(v);
+            }
             mesh.push_polygon(&idx, material);
         }
     }

@@ -1,0 +1,410 @@
+//! Face-cluster hierarchies against answers nobody chose: the M identity at every node, tessellation
+//! invariance of M and p_E on a planar quad, roots of non-manifold and disconnected meshes, layout
+//! invariants, bounds that hold their faces, scale invariance, thread-count determinism, the cache round trip.
+
+use glam::{DVec3, dvec3};
+use radlab_face_cluster::{
+    FaceClusterError, FaceClusterParams, FaceClusterTree, bounds::angle_between, digest,
+};
+use radlab_scene::{Material, Scene, SceneBuilder, builtin, sampling};
+
+fn build(scene: &Scene) -> FaceClusterTree {
+    FaceClusterTree::build(scene, &FaceClusterParams::default()).expect("builds")
+}
+
+fn bumpy() -> Scene {
+    builtin("bumpy-sphere?faces=2000").expect("builtin")
+}
+
+fn terrain() -> Scene {
+    builtin("terrain?faces=2000").expect("builtin")
+}
+
+/// The scene with every vertex multiplied by `s` (same indices and materials).
+fn scaled(scene: &Scene, s: f64) -> Scene {
+    let mut b = SceneBuilder::new(&scene.name);
+    for m in &scene.materials {
+        b.add_material(m.clone()).expect("valid");
+    }
+    for &v in &scene.vertices {
+        b.add_vertex(v * s, "scaled").expect("finite");
+    }
+    for f in &scene.faces {
+        let added = b
+            .add_polygon(f.vertex_indices(), f.material, "scaled")
+            .expect("valid");
+        assert_eq!(added, 1, "a face changed under scaling");
+    }
+    b.build().expect("faces")
+}
+
+/// Per node: first face, face count, first child, parent.
+type NodeShape = (usize, usize, usize, Option<usize>);
+
+/// The tree's shape: every node's [`NodeShape`] and the face order.
+fn shape(t: &FaceClusterTree) -> (Vec<NodeShape>, Vec<u32>) {
+    let nodes = t
+        .nodes()
+        .iter()
+        .map(|n| {
+            (
+                n.faces().start,
+                n.faces().len(),
+                n.children().start,
+                n.parent(),
+            )
+        })
+        .collect();
+    (nodes, t.face_order().to_vec())
+}
+
+/// Checks layout invariants: the roots' face ranges tile 0..k, children tile their parent's range in
+/// order, parents precede children, leaves are single faces, the face order is a permutation.
+fn assert_layout(scene: &Scene, t: &FaceClusterTree) {
+    let k = scene.face_count();
+    let mut seen = vec![false; k];
+    for &f in t.face_order() {
+        assert!(
+            !std::mem::replace(&mut seen[f as usize], true),
+            "face {f} twice"
+        );
+    }
+    assert!(seen.iter().all(|&s| s));
+    let mut at = 0;
+    for r in t.roots() {
+        let n = t.node(r);
+        assert_eq!(n.parent(), None);
+        assert_eq!(n.faces().start, at);
+        at = n.faces().end;
+    }
+    assert_eq!(at, k);
+    for (i, n) in t.nodes().iter().enumerate() {
+        if i >= t.roots().end {
+            let p = n.parent().expect("non-root has a parent");
+            assert!(p < i && t.node(p).children().contains(&i));
+        }
+        if n.is_leaf() {
+            assert_eq!(n.faces().len(), 1);
+            assert_eq!(t.leaf_of_face(t.faces_of(i)[0] as usize), i);
+            continue;
+        }
+        assert_eq!(n.children().len(), 2);
+        assert!(n.children().start > i);
+        let mut at = n.faces().start;
+        for c in n.children() {
+            assert_eq!(t.node(c).faces().start, at, "node {i} child {c}");
+            at = t.node(c).faces().end;
+        }
+        assert_eq!(at, n.faces().end);
+    }
+}
+
+#[test]
+fn layout_is_contiguous_and_nested() {
+    for scene in [bumpy(), terrain()] {
+        let t = build(&scene);
+        assert_layout(&scene, &t);
+        assert_eq!(t.nodes().len(), 2 * scene.face_count() - t.roots().len());
+    }
+}
+
+/// Greedy contraction is not balanced by construction, but regions growing in step keep the tree within a
+/// small factor of a balanced tree's log₂ k; a region taking in its neighbours one face at a time (the
+/// failure the balance and planarity normalisation prevent) makes it grow like √k or k instead.
+#[test]
+fn trees_stay_shallow() {
+    for scene in [bumpy(), terrain()] {
+        let t = build(&scene);
+        let log2k = (scene.face_count() as f64).log2();
+        assert!(
+            (t.depth() as f64) <= 4.0 * log2k,
+            "{}: depth {} for {} faces",
+            scene.name,
+            t.depth(),
+            scene.face_count()
+        );
+    }
+}
+
+/// Σ (E_i + ρ_i n_i·e) A_i n_i over a node's faces equals p_E + M e when every n_i·e ≥ 0 (Willmott et al.
+/// 1999), at every node whose normal cone is narrower than a hemisphere, for random such e.
+#[test]
+fn power_vector_identity_holds_at_every_node() {
+    let scene = bumpy();
+    let t = build(&scene);
+    let mut r = sampling::rng(7, 0);
+    let mut checked = 0;
+    for (i, n) in t.nodes().iter().enumerate() {
+        let spare = std::f64::consts::FRAC_PI_2 - n.cone.half_angle;
+        if spare <= 0.0 {
+            continue;
+        }
+        // e within the cone's dual: at most `spare` from the axis, random magnitude per channel.
+        let (b1, b2) = sampling::basis(n.cone.axis);
+        let e: [DVec3; 3] = std::array::from_fn(|_| {
+            let th = spare * sampling::uniform(&mut r);
+            let ph = std::f64::consts::TAU * sampling::uniform(&mut r);
+            let d = n.cone.axis * th.cos() + (b1 * ph.cos() + b2 * ph.sin()) * th.sin();
+            d * (10.0 * sampling::uniform(&mut r))
+        });
+        let got = n.power_vector(e);
+        for c in 0..3 {
+            let (mut sum, mut scale) = (DVec3::ZERO, 0.0);
+            for &f in t.faces_of(i) {
+                let face = &scene.faces[f as usize];
+                let (rho, em) = (
+                    scene.reflectance(f as usize)[c],
+                    scene.emission(f as usize)[c],
+                );
+                let cos = face.normal.dot(e[c]);
+                assert!(
+                    cos >= -1e-12 * e[c].length(),
+                    "e outside the cone's dual at node {i}"
+                );
+                let b = em + rho * cos.max(0.0);
+                sum += face.normal * (b * face.area);
+                scale += b.abs() * face.area;
+            }
+            assert!(
+                (got[c] - sum).length() <= 1e-12 * scale.max(f64::MIN_POSITIVE),
+                "node {i} channel {c}: {} vs {sum}",
+                got[c]
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked > scene.face_count(), "only {checked} nodes checked");
+}
+
+fn quad_scene(n: usize) -> Scene {
+    // A tilted 2 × 1 rectangle, n × n cells, each split into two triangles (2n² faces).
+    let o = dvec3(0.3, -1.0, 2.0);
+    let (u, v) = (dvec3(2.0, 0.0, 0.0), dvec3(0.0, 0.6, 0.8));
+    let mut b = SceneBuilder::new("quad");
+    let m = Material::new("m", dvec3(0.3, 0.5, 0.7), dvec3(1.0, 2.0, 3.0)).expect("valid");
+    let m = b.add_material(m).expect("valid");
+    for j in 0..=n {
+        for i in 0..=n {
+            b.add_vertex(
+                o + u * (i as f64 / n as f64) + v * (j as f64 / n as f64),
+                "quad",
+            )
+            .expect("finite");
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    for j in 0..n {
+        for i in 0..n {
+            b.add_polygon(&[id(i, j), id(i + 1, j), id(i + 1, j + 1)], m, "quad")
+                .expect("valid");
+            b.add_polygon(&[id(i, j), id(i + 1, j + 1), id(i, j + 1)], m, "quad")
+                .expect("valid");
+        }
+    }
+    b.build().expect("faces")
+}
+
+/// M and p_E do not depend on how a planar quad is split (Willmott et al. 1999): 2, 200 and 20,000
+/// triangles give one root equal to the single quad's ρ A n nᵀ and E A n.
+#[test]
+fn planar_quad_root_does_not_depend_on_its_tessellation() {
+    let (rho, e) = (dvec3(0.3, 0.5, 0.7), dvec3(1.0, 2.0, 3.0));
+    let n = dvec3(0.0, 0.6, 0.8).cross(dvec3(1.0, 0.0, 0.0)) * -1.0;
+    let area = 2.0;
+    for cells in [1, 10, 100] {
+        let scene = quad_scene(cells);
+        assert_eq!(scene.face_count(), 2 * cells * cells);
+        let t = build(&scene);
+        assert_eq!(t.roots().len(), 1, "{} triangles", scene.face_count());
+        let root = t.node(0);
+        assert!((root.area - area).abs() <= 1e-9 * area);
+        assert!(root.cone.half_angle < 1e-9 && (root.cone.axis - n).length() < 1e-9);
+        // λ_min of the scatter is known to about ε‖S‖, so its square root, the rms distance, to √ε × size.
+        assert!(root.plane_rms <= 4.0 * f64::EPSILON.sqrt() * scene.diagonal());
+        for c in 0..3 {
+            let want = radlab_face_cluster::SymMat3::outer(n, rho[c] * area);
+            for (x, y) in root.m[c].e.iter().zip(want.e) {
+                assert!(
+                    (x - y).abs() <= 1e-9 * rho[c] * area,
+                    "{cells}: M {:?}",
+                    root.m[c]
+                );
+            }
+            assert!((root.p_e[c] - n * (e[c] * area)).length() <= 1e-9 * e[c] * area);
+        }
+    }
+}
+
+/// A triangle mesh of three quad "wings" hinged on one edge (a non-manifold edge used by three faces) and,
+/// apart, a closed tetrahedron: each wing and the tetrahedron end as their own root, four in all.
+#[test]
+fn non_manifold_edges_and_components_make_separate_roots() {
+    let mut b = SceneBuilder::new("wings");
+    let m = b
+        .add_material(Material::new("m", DVec3::splat(0.5), DVec3::ZERO).expect("valid"))
+        .expect("valid");
+    let h0 = b.add_vertex(DVec3::ZERO, "w").expect("finite");
+    let h1 = b.add_vertex(DVec3::Z, "w").expect("finite");
+    for k in 0..3 {
+        let a = std::f64::consts::TAU * k as f64 / 3.0;
+        let d = dvec3(a.cos(), a.sin(), 0.0);
+        let p0 = b.add_vertex(d, "w").expect("finite");
+        let p1 = b.add_vertex(d + DVec3::Z, "w").expect("finite");
+        b.add_polygon(&[h0, p0, p1], m, "w").expect("valid");
+        b.add_polygon(&[h0, p1, h1], m, "w").expect("valid");
+    }
+    let o = dvec3(5.0, 0.0, 0.0);
+    let t: Vec<u32> = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z]
+        .iter()
+        .map(|&p| b.add_vertex(o + p, "t").expect("finite"))
+        .collect();
+    for f in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+        b.add_polygon(&f.map(|i| t[i]), m, "t").expect("valid");
+    }
+    let scene = b.build().expect("faces");
+    let tree = build(&scene);
+    assert_eq!(tree.stats().non_manifold_edges, 1);
+    assert_eq!(tree.stats().dual_edges, 3 + 6);
+    assert_eq!(tree.roots().len(), 4);
+    assert_layout(&scene, &tree);
+    // The tetrahedron is closed: its root's vector area vanishes and its cone is the whole sphere.
+    let tet = tree
+        .roots()
+        .find(|&r| tree.node(r).faces().len() == 4)
+        .expect("the tetrahedron's root");
+    assert!(tree.node(tet).vector_area.length() < 1e-12);
+    assert!(tree.node(tet).cone.half_angle > std::f64::consts::FRAC_PI_2);
+}
+
+/// Normal cones hold their faces' normals; boxes and spheres their faces' vertices; samples are points of
+/// the node's own faces.
+#[test]
+fn bounds_hold_their_faces() {
+    for scene in [bumpy(), terrain()] {
+        let t = build(&scene);
+        let tol = 1e-9 * scene.diagonal();
+        for (i, n) in t.nodes().iter().enumerate() {
+            let leaf_samples: Vec<DVec3> = t
+                .faces_of(i)
+                .iter()
+                .flat_map(|&f| t.samples(t.leaf_of_face(f as usize)).to_vec())
+                .collect();
+            for &f in t.faces_of(i) {
+                let face = &scene.faces[f as usize];
+                assert!(
+                    n.cone.contains(face.normal, 1e-9),
+                    "node {i}: normal {} is {} from the axis, cone {}",
+                    face.normal,
+                    angle_between(n.cone.axis, face.normal),
+                    n.cone.half_angle
+                );
+                for &v in scene.polygon(f as usize).vertices() {
+                    assert!(
+                        n.obb.contains(v, tol),
+                        "node {i}: box {:?} misses {v}",
+                        n.obb
+                    );
+                    assert!(n.sphere.contains(v, tol), "node {i}: sphere misses {v}");
+                }
+            }
+            for p in t.samples(i) {
+                assert!(
+                    leaf_samples.contains(p),
+                    "node {i}: sample {p} is not on its faces"
+                );
+            }
+            if n.is_leaf() {
+                let poly = scene.polygon(t.faces_of(i)[0] as usize);
+                for &p in t.samples(i) {
+                    assert!(poly.distance_to(p) <= tol);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_tree_is_the_same_at_any_scale() {
+    for scene in [bumpy(), terrain()] {
+        let want = shape(&build(&scene));
+        for s in [1e-4, 1e4] {
+            assert!(
+                shape(&build(&scaled(&scene, s))) == want,
+                "{} at scale {s}",
+                scene.name
+            );
+        }
+    }
+}
+
+#[test]
+fn one_and_two_threads_build_the_same_bits() {
+    let scene = bumpy();
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| build(&scene))
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(one == two);
+    assert_eq!(
+        one.to_bytes().expect("encodes"),
+        two.to_bytes().expect("encodes")
+    );
+}
+
+#[test]
+fn cache_round_trip_is_bit_identical_and_refuses_other_meshes() {
+    let scene = terrain();
+    let params = FaceClusterParams::default();
+    let t = build(&scene);
+    let key = digest(&scene, &params);
+    assert_eq!(t.digest(), &key);
+    let bytes = t.to_bytes().expect("encodes");
+    let mut file = Vec::new();
+    t.write_to(&mut file).expect("writes");
+    assert_eq!(file, bytes);
+    let back = FaceClusterTree::read_from(&mut file.as_slice(), Some(&key)).expect("reads");
+    assert!(back == t);
+    assert_eq!(back.to_bytes().expect("encodes"), bytes);
+
+    // Another mesh, other parameters, damaged bytes.
+    let other = scaled(&scene, 2.0);
+    let other_key = digest(&other, &params);
+    assert_ne!(other_key, key);
+    let seeded = FaceClusterParams {
+        seed: 2,
+        ..params.clone()
+    };
+    assert_ne!(digest(&scene, &seeded), key);
+    assert!(matches!(
+        FaceClusterTree::from_bytes(&bytes, Some(&other_key)),
+        Err(FaceClusterError::CacheStale { .. })
+    ));
+    assert!(matches!(
+        FaceClusterTree::from_bytes(&bytes[..bytes.len() / 2], None),
+        Err(FaceClusterError::CacheFormat { .. })
+    ));
+    let mut bad = bytes.clone();
+    bad[0] ^= 1;
+    let e = FaceClusterTree::from_bytes(&bad, None).expect_err("bad magic");
+    assert!(e.to_string().contains("delete the cache file"), "{e}");
+}
+
+#[test]
+fn bad_parameters_say_what_to_change() {
+    let scene = quad_scene(1);
+    let p = FaceClusterParams {
+        samples_per_node: 0,
+        ..FaceClusterParams::default()
+    };
+    let e = FaceClusterTree::build(&scene, &p).expect_err("0 samples");
+    assert!(e.to_string().contains("samples-per-node"), "{e}");
+    let p = FaceClusterParams {
+        shape_weight: f64::NAN,
+        ..FaceClusterParams::default()
+    };
+    assert!(FaceClusterTree::build(&scene, &p).is_err());
+}
