@@ -90,5 +90,5 @@ mod shooting;
 mod solver;
 mod substructuring;
 
-pub use params::ProgressiveParams;
+pub use params::{Overshoot, ProgressiveParams};
 pub use solver::{ElementView, ProgressiveSolution, ProgressiveSolver, StopReason};

@@ -3,7 +3,7 @@
 //! the same mesh, and the structural promises (monotone unshot power, determinism, scale invariance, adaptive
 //! subdivision where the light changes and nowhere else).
 
-use radlab_progressive::{ProgressiveParams, ProgressiveSolver, StopReason};
+use radlab_progressive::{Overshoot, ProgressiveParams, ProgressiveSolver, StopReason};
 use radlab_scene::form_factor::VisibilitySampling;
 use radlab_scene::glam::{DVec3, dvec3};
 use radlab_scene::{Accel, Material, Rgb, Scene, SceneBuilder, Solver, Step, builtin};
@@ -47,6 +47,8 @@ fn furnace_cube_converges_to_e_over_one_minus_rho() {
             visibility: VisibilitySampling::Centre,
             adaptive: false,
             stop_unshot_fraction: stop,
+            // Plain shooting: its shortfall is one-signed (tests/overshoot.rs covers overshooting).
+            overshoot: Overshoot::None,
             ..Default::default()
         };
         let mut solver = ProgressiveSolver::new(&scene, &accel, params, 1).expect("solver");
@@ -207,6 +209,8 @@ fn unshot_power_decreases_monotonically() {
             element_size: Some(0.125),
             adaptive,
             stop_unshot_fraction: 1e-3,
+            // A property of plain shooting: overshooting lets unshot radiosity go negative on purpose.
+            overshoot: Overshoot::None,
             ..Default::default()
         };
         let mut solver = ProgressiveSolver::new(&scene, &accel, params, 2).expect("solver");
@@ -249,6 +253,8 @@ fn emitters_shoot_with_direct_visibility_and_the_rest_with_indirect() {
             adaptive: false,
             indirect_visibility: indirect,
             max_shots: Some(shots),
+            // Plain shooting, so the light's patches are the first four shooters.
+            overshoot: Overshoot::None,
             ..Default::default()
         };
         let mut s = ProgressiveSolver::new(&scene, &accel, params, 3).expect("solver");
@@ -520,6 +526,8 @@ fn ambient_term_fills_in_the_unshot_light_for_display_only() {
         adaptive: false,
         visibility: VisibilitySampling::Unoccluded,
         max_shots: Some(48),
+        // The display term of plain shooting (overshooting folds the same estimate into the shots).
+        overshoot: Overshoot::None,
         ..Default::default()
     };
     let mut plain = ProgressiveSolver::new(&scene, &accel, params.clone(), 1).expect("solver");
