@@ -176,12 +176,21 @@ const EXCEPTIONS: &[Exception] = &[
     },
     Exception {
         method: "hierarchical",
+        case: "energy balance",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 6.0e-4 against 3e-4 (2026-11-30).
+        reason: "source-side averaging conserves energy only up to the refinement's accuracy (crate \
+                 documentation: about 1e-4 at these settings on a closed box, its test's bound 3e-4); this room \
+                 is 6 times that",
+    },
+    Exception {
+        method: "hierarchical",
         case: "emitters 1e6 apart: balance",
         expect: Expect::Misses,
         overrides: &[],
-        // Measured 6.3e-4 against 3e-4 (2026-11-30); the same room with one emitter: 5.4e-5.
-        reason: "source-side averaging conserves energy only up to the refinement's accuracy (crate \
-                 documentation: about 1e-4 at these settings on a closed box); here it is 6 times that",
+        // Measured 5.8e-4 against 3e-4 (2026-11-30).
+        reason: "as for the energy balance: source-side averaging, about 6 times the crate's stated 1e-4",
     },
     Exception {
         method: "hierarchical",
@@ -614,12 +623,13 @@ fn howell_case(m: &MethodInfo, scene: &Scene, h: f64, params: &toml::Table, seed
 }
 
 /// Relative energy imbalance |absorbed − emitted| / emitted (worst channel) on a closed scene whose faces are
-/// all reflective, integrating over a 4 × 4 grid per input face (exact for elements that tile faces in 2^k).
+/// all reflective, integrating over a 16 × 16 grid of cell centres per input face: exact for piecewise-constant
+/// elements that tile each face in 2^k × 2^k for k ≤ 4 (the table keeps every method's elements that coarse).
 fn balance_case(m: &MethodInfo, scene: &Scene, s: &Settings, params: &toml::Table) -> Outcome {
     let accel = Accel::new(scene);
     let mut grid_pts = Vec::new();
     for f in 0..scene.face_count() {
-        grid_pts.extend(face_grid(scene, f, 4));
+        grid_pts.extend(face_grid(scene, f, 16));
     }
     let points: Vec<(FaceId, DVec3)> = grid_pts.iter().map(|&(f, p, _)| (f, p)).collect();
     match solve(m, scene, &accel, params, s.seeds, &points) {
