@@ -176,7 +176,9 @@ pub(crate) fn refine(
                 .map(|c| c.area * c.radiosity)
                 .sum();
             let patch = &mut mesh.patches[parent.patch as usize];
-            patch.unshot += (after - parent.area * parent.radiosity) / patch.area;
+            let change = (after - parent.area * parent.radiosity) / patch.area;
+            patch.unshot += change;
+            patch.lit |= change != Rgb::ZERO;
         }
         // New leaves: drop the split ones, add the children, keep ascending order.
         mesh.leaves.retain(|&e| mesh.elements[e as usize].is_leaf());

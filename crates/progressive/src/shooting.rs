@@ -17,6 +17,28 @@
 //! (seed, e, j) only, so every shot of j gives e the same factor: progressive radiosity converges to the
 //! solution of one fixed linear system, whatever the order of shots or the thread count.
 //!
+//! **Overshooting** (Feda & Purgathofer 1992; Gortler, Cohen & Slusallek 1993 analyse it as over-relaxation
+//! of Southwell's iteration). At high reflectance almost all of the work of plain shooting goes into one slow
+//! mode: every patch receives back, round after round, a fraction ρ of what the scene shot, so the unshot power
+//! falls only by a factor ρ per round and about N ln(1/ε)/(1 − ρ) shots are needed. With overshooting a patch
+//! light has reached sends its unshot radiosity plus an estimate of what it will still receive,
+//!
+//! s_j = ΔB_j + ρ_j B_amb,   B_amb = R · Σ_{p lit} A_p ΔB_p / Σ_{p lit} A_p,   R = 1 / (1 − ĝ),
+//!
+//! the ambient radiosity of Cohen et al. (1988) over the patches light has reached, with the interreflection
+//! factor R taken from ĝ, the measured fraction of the power shot so far that came back as unshot power
+//! (Σ|returned| / Σ|shot| per channel, capped at the largest reflectance). In a closed furnace of reflectance ρ,
+//! ĝ = ρ and the first shot of every patch already sends its exact radiosity E/(1 − ρ); where light escapes ĝ
+//! is smaller than the area-mean reflectance Cohen et al. use, so open scenes are not over-driven. The shot is
+//! booked as any other, S_j += s_j, ΔB_j −= s_j and every receiver gains ρ_e F_{e→j} s_j, so the invariant
+//! B_p = S_p + ΔB_p and the relation B_e = E_e + ρ_e Σ_j F_{e→j} S_j hold after every shot, ΔB_j may go
+//! negative (a later shot of j sends the correction), and the unshot radiosity is exactly the residual
+//! E + ρ F S − S of the linear system: shooting stops at the same fixed point as plain shooting, and the
+//! stopping rule on Σ_p A_p |ΔB_p| bounds the error in the same way (in a closed scene of reflectance ρ, a
+//! relative error of the total radiosity power of at most ρ times the unshot fraction, whatever the signs).
+//! The shooter is the patch with the largest power A_j |s_j| it would send. A patch no light has reached
+//! (ΔB = 0, never received) never overshoots, so no light enters a closed unlit interior.
+//!
 //! Power is compared across channels by each channel's share of that channel's emitted power, Σ_c A |ΔB_c| /
 //! Φ_c, so a dim channel is not ignored; the unshot fraction is the worst channel's Σ_p A_p |ΔB_p,c| / Φ_c.
 
@@ -133,15 +155,87 @@ pub(crate) fn channel_weights(emitted: Rgb) -> Rgb {
     )
 }
 
-/// The patch with the largest unshot power Σ_c w_c A |ΔB_c| (lowest index on ties), if any is nonzero.
-pub(crate) fn select_shooter(patches: &[Patch], weights: Rgb) -> Option<usize> {
+/// The overshooting state: power shot and power returned so far, for the measured interreflection factor.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Interreflection {
+    /// Σ over shots of A_j |s_j| per channel.
+    pub shot: Rgb,
+    /// Σ over shots of |Σ_e A_e ΔB_e| per channel: the power that came back as unshot power.
+    pub returned: Rgb,
+    /// Largest reflectance in the scene per channel: no interreflection ratio can exceed it.
+    pub cap: Rgb,
+}
+
+impl Interreflection {
+    pub fn new(scene: &Scene) -> Self {
+        let cap = (0..scene.face_count())
+            .map(|f| scene.reflectance(f))
+            .fold(Rgb::ZERO, Rgb::max);
+        Self {
+            shot: Rgb::ZERO,
+            returned: Rgb::ZERO,
+            cap,
+        }
+    }
+
+    /// Books one shot that sent `sent` (A_j s_j per channel) and brought back `returned` (Σ_e A_e ΔB_e).
+    pub fn record(&mut self, sent: Rgb, returned: Rgb) {
+        self.shot += sent.abs();
+        self.returned += returned.abs();
+    }
+
+    /// R = 1 / (1 − ĝ) per channel, ĝ the measured return ratio capped at the largest reflectance (1 before the
+    /// first shot).
+    pub fn factor(&self) -> Rgb {
+        let g = Rgb::from_array(std::array::from_fn(|c| {
+            if self.shot[c] > 0.0 {
+                (self.returned[c] / self.shot[c]).min(self.cap[c])
+            } else {
+                0.0
+            }
+        }));
+        Rgb::ONE / (Rgb::ONE - g)
+    }
+}
+
+/// The ambient radiosity over the patches light has reached, R · Σ_lit A ΔB / Σ_lit A (signed; zero if none).
+pub(crate) fn lit_ambient(patches: &[Patch], interreflection: Rgb) -> Rgb {
+    let (mut area, mut unshot) = (0.0, Rgb::ZERO);
+    for p in patches.iter().filter(|p| p.lit) {
+        area += p.area;
+        unshot += p.area * p.unshot;
+    }
+    if area > 0.0 {
+        interreflection * unshot / area
+    } else {
+        Rgb::ZERO
+    }
+}
+
+/// The radiosity patch `p` sends when shot: ΔB_p, plus ρ_p `ambient` if light has reached it.
+fn amount(scene: &Scene, p: &Patch, ambient: Option<Rgb>) -> Rgb {
+    match ambient {
+        Some(a) if p.lit => p.unshot + scene.reflectance(p.face as usize) * a,
+        _ => p.unshot,
+    }
+}
+
+/// The patch that would send the largest power Σ_c w_c A |s_c| (lowest index on ties) and what it sends, if
+/// any would send anything. `ambient` is the overshooting estimate B_amb, `None` for plain shooting.
+pub(crate) fn select_shooter(
+    scene: &Scene,
+    patches: &[Patch],
+    weights: Rgb,
+    ambient: Option<Rgb>,
+) -> Option<(usize, Rgb)> {
     let mut best = None;
     let mut best_power = 0.0;
     for (i, p) in patches.iter().enumerate() {
-        let power = p.area * p.unshot.abs().dot(weights);
+        let s = amount(scene, p, ambient);
+        let power = p.area * s.abs().dot(weights);
         if power > best_power {
             best_power = power;
-            best = Some(i);
+            best = Some((i, s));
         }
     }
     best
@@ -157,19 +251,21 @@ pub(crate) fn unshot_fraction(patches: &[Patch], weights: Rgb) -> f64 {
     (unshot_power(patches) * weights).max_element()
 }
 
-/// Shoots patch `j`'s unshot radiosity to every leaf element. `factors` is scratch space.
+/// Shoots radiosity `amount` from patch `j` to every leaf element (`amount` = its unshot radiosity for plain
+/// shooting). Returns the work and the power that came back as unshot power, Σ_e A_e ΔB_e. `factors` is scratch
+/// space.
 pub(crate) fn shoot(
     scene: &Scene,
     accel: &Accel,
     kernel: &Kernel,
     mesh: &mut Mesh,
     j: usize,
+    amount: Rgb,
     factors: &mut Vec<(f64, Work)>,
-) -> Work {
+) -> (Work, Rgb) {
     let shooter = mesh.patches[j];
-    let delta = shooter.unshot;
-    mesh.patches[j].shot += delta;
-    mesh.patches[j].unshot = Rgb::ZERO;
+    mesh.patches[j].shot += amount;
+    mesh.patches[j].unshot -= amount;
     let elements = &mesh.elements;
     let gather = |&e: &u32| {
         let el = &elements[e as usize];
@@ -190,15 +286,18 @@ pub(crate) fn shoot(
     }
     // Apply in leaf order on one thread: sums are the same for any thread count.
     let mut work = Work::default();
+    let mut returned = Rgb::ZERO;
     for (&e, &(f, w)) in mesh.leaves.iter().zip(factors.iter()) {
         work += w;
         if f > 0.0 {
             let el = &mut mesh.elements[e as usize];
-            let gain = scene.reflectance(el.face as usize) * delta * f;
+            let gain = scene.reflectance(el.face as usize) * amount * f;
             el.radiosity += gain;
+            returned += el.area * gain;
             let patch = &mut mesh.patches[el.patch as usize];
             patch.unshot += gain * (el.area / patch.area);
+            patch.lit |= gain != Rgb::ZERO;
         }
     }
-    work
+    (work, returned)
 }

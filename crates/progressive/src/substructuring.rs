@@ -26,8 +26,12 @@ pub(crate) struct Patch {
     pub face: u32,
     /// Whether its face emits (its shots are direct light).
     pub emits: bool,
-    /// Unshot radiosity ΔB_p (W/m²). May turn slightly negative after adaptive subdivision corrects B_p.
+    /// Unshot radiosity ΔB_p (W/m²). May turn negative: after adaptive subdivision corrects B_p, and whenever
+    /// the patch has shot more than it held (overshooting).
     pub unshot: Rgb,
+    /// Whether light has reached it: it emits, or some shot or re-gather changed its radiosity. Only such
+    /// patches overshoot, so light never enters a part of the scene no light reaches.
+    pub lit: bool,
     /// Total radiosity shot so far, S_p.
     pub shot: Rgb,
     /// Its top-level elements: `first_root .. first_root + root_count` in the element arena.
@@ -161,6 +165,7 @@ impl Mesh {
                     face: f as u32,
                     emits: scene.material(f).is_emitter(),
                     unshot: e_face,
+                    lit: e_face != Rgb::ZERO,
                     shot: Rgb::ZERO,
                     first_root,
                     root_count: elements.len() as u32 - first_root,

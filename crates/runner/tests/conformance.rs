@@ -1,0 +1,1088 @@
+//! The conformance suite: every method in the runner's registry ([`radlab_runner::methods::methods`]) on the
+//! same small scenes whose answers nobody here chose, so a method registered later is covered without editing
+//! this file.
+//!
+//! Cases and their exact answers:
+//! - **furnace cube and sphere** at ρ = 0, 0.5, 0.9, 0.99, 0.999: a closed enclosure of uniform ρ and E has
+//!   B = E/(1 − ρ) everywhere (the kernel's rows sum to 1 at every point); within 1 %.
+//! - **Howell's plates**: parallel coaxial squares and perpendicular squares sharing an edge (Howell's catalogue,
+//!   C-11 and C-14), a black emitter lighting a receiver that sees nothing else, so the receiver's radiosity at
+//!   x is B(x) = ρ E F_{dx→emitter}, the point-to-polygon form factor (Lambert's contour integral; Baum,
+//!   Rushmeier & Winget 1989, eq. 3). A method with constant elements of diameter d holds, at x, the value of
+//!   B at some point of x's element (an element mean is attained somewhere in it), so its error at x is at
+//!   most d |∇B| there: the bound on the relative L1 error is d Σ|∇B(x_i)| / Σ B(x_i), with ∇B by central
+//!   differences of the closed form, d = √2 h for square elements of side h.
+//! - **energy balance**: in a closed scene the emitted power equals the absorbed power
+//!   Σ_f ∫ (1 − ρ_f)(B − E_f)/ρ_f dA, to each method's stated tolerance (the table below).
+//! - **threads**: 1 and 2 rayon threads (pools built explicitly) give bit-identical radiosity.
+//! - **scale**: the scene scaled by 1e-4 and 1e4 (lengths in the parameters scaled alike) gives the same
+//!   radiosity to 1e-9 relative: radiosity is an exitance, and every default length is relative.
+//! - **box on/above floor, boxes touching walls**: closed boxes 1e-6 above a floor and flush against walls and
+//!   floor, each holding a closed unlit interior (inward faces): no light reaches it (B = 0 exactly), and no
+//!   radiosity anywhere is negative or non-finite.
+//! - **sliver** (aspect ratio 1e4) and **fan** (a triangle fan with a face of relative area 5e-8) inside a
+//!   furnace: still B = E/(1 − ρ) within 1 %.
+//! - **emitter facing away** from every surface: exactly its own emission on it and zero elsewhere.
+//! - **bright emitters**: two emitters 1e6 apart in a closed box: energy balance, B ≥ E on both, finite.
+//!
+//! Monte Carlo methods carry noise: a method listed with `seeds > 1` is run with that many seeds, the suite
+//! compares the mean of the runs and adds three standard errors of that mean (from the spread of the runs) to
+//! the bound. Test-sized parameters come from [`settings`], keyed by method name; an unknown method runs at its
+//! defaults with two seeds (so noise, if any, is measured rather than assumed absent). A method that cannot meet
+//! a case at test-sized budgets is listed in [`EXCEPTIONS`] with the measured error and the reason; the suite
+//! checks that the exception still holds as stated (so a fixed method fails here until its exception is removed).
+//!
+//! Run with `--nocapture` to print the method × case table.
+
+use std::fmt::Write as _;
+
+use radlab_runner::methods::{MethodInfo, methods};
+use radlab_scene::form_factor::point_polygon;
+use radlab_scene::glam::{DVec3, dvec3};
+use radlab_scene::{
+    Accel, FaceId, Material, Rgb, Scene, SceneBuilder, Solver, Step, builtin, evaluation_points,
+};
+
+/// Safety cap on steps per run (a method that has not converged by then fails the case, saying so).
+const MAX_STEPS: usize = 200_000;
+/// Evaluation points per scene (deterministic, area-stratified over the non-emitting faces).
+const POINTS: usize = 96;
+
+/// Test-sized settings of one method.
+struct Settings {
+    /// Parameters for a case whose input faces have edge `h` (scene units).
+    params: fn(h: f64) -> toml::Table,
+    /// Runs with independent seeds (1 for deterministic estimates).
+    seeds: u64,
+    /// Relative energy imbalance the method states for a converged closed scene at these settings.
+    balance: f64,
+}
+
+fn table(pairs: &[(&str, toml::Value)]) -> toml::Table {
+    pairs
+        .iter()
+        .map(|(k, v)| ((*k).to_string(), v.clone()))
+        .collect()
+}
+
+/// The table of test-sized parameters, keyed by method name; defaults for a method not listed.
+fn settings(method: &str) -> Settings {
+    match method {
+        // Elements = input faces; tolerance 1e-4 on the relative L1 error of B. The matrix is symmetrised and
+        // rows sum to 1 in a closed enclosure, so the balance is off only by that error: |imbalance| ≤
+        // ((1 − ρ_min)/ρ_min) (ΣAB/Φ) 1e-4 ≤ 2.33 × 3.33 × 1e-4 in the balance rooms (ρ ∈ [0.3, 0.7]).
+        "matrix" => Settings {
+            params: |h| table(&[("element_size", h.into())]),
+            seeds: 1,
+            balance: 7.8e-4,
+        },
+        // Elements = patches = input faces, 2 × 2 receiver points. Its crate documentation states a reciprocity
+        // error of 1.9e-3 at 2 × 2 points; the stop at an unshot fraction f = 2e-3 leaves an error in the power
+        // norm of at most ρ_max/(1 − ρ_max) f Φ, which the absorption weight (1 − ρ_min)/ρ_min turns into an
+        // imbalance of at most 2.33 × 2.33 × 2e-3 = 1.09e-2.
+        "progressive" => Settings {
+            params: |h| {
+                table(&[
+                    ("element_size", h.into()),
+                    ("patch_size", h.into()),
+                    ("quadrature", 2.into()),
+                ])
+            },
+            seeds: 1,
+            balance: 1.9e-3 + 1.09e-2,
+        },
+        // The settings under which its crate documentation and tests state the energy balance: the `f` oracle
+        // at ε = 0.02 on a closed box conserves energy to about 1e-4 (its test bound is 3e-4); leaves no
+        // smaller than 1/16 of an input face.
+        "hierarchical" => Settings {
+            params: |h| {
+                table(&[
+                    ("oracle", "f".into()),
+                    ("epsilon", 0.02.into()),
+                    ("min_element_size", (h / 16.0).into()),
+                ])
+            },
+            seeds: 1,
+            balance: 3e-4,
+        },
+        // 4 runs of 5 × 4,000 particles on elements = input faces. Particle tracing conserves energy (every
+        // particle is absorbed somewhere) and the collision estimator is unbiased for each element's mean, so the
+        // balance is limited by noise only, which the suite adds.
+        "mc-radiosity" => Settings {
+            params: |h| {
+                table(&[
+                    ("element_size", h.into()),
+                    ("particles_per_step", 4000.into()),
+                    ("max_steps", 5.into()),
+                ])
+            },
+            seeds: 4,
+            balance: 0.0,
+        },
+        _ => Settings {
+            params: |_| toml::Table::new(),
+            seeds: 2,
+            balance: 1e-2,
+        },
+    }
+}
+
+/// What an exception promises: the case still misses its bound (and stays finite), or at least stays finite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Expect {
+    /// The measured error still exceeds the bound; all values finite.
+    Misses,
+    /// Runs (with the overrides) and stays finite and non-negative; accuracy not claimed.
+    Finite,
+}
+
+/// A method that cannot meet a case at test-sized budgets, with the measured error and the reason.
+struct Exception {
+    method: &'static str,
+    case: &'static str,
+    expect: Expect,
+    /// Parameter overrides for the check run (e.g. a smaller budget when the full one is too slow for a test).
+    overrides: &'static [(&'static str, &'static str)],
+    reason: &'static str,
+}
+
+const EXCEPTIONS: &[Exception] = &[
+    Exception {
+        method: "mc-radiosity",
+        case: "fan with a near-zero-area face in a furnace",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 0.90 (2026-11-30): the point on the tiny triangle reads B = E.
+        reason: "an element of area 2.5e-8 catches no particle out of 2e4 (expected count 5e-4), so its \
+                 reflected radiosity is estimated as 0; only the particle budget can fix it",
+    },
+    Exception {
+        method: "mc-radiosity",
+        case: "furnace cube ρ=0.999",
+        expect: Expect::Finite,
+        overrides: &[("particles_per_step", "100"), ("max_steps", "1")],
+        // At the test-sized budget (4 × 20,000 particles) it passed: 4.4e-3 against a bound of 2.0e-2, in 79 s.
+        reason: "random walks last 1/(1 − ρ) = 1000 bounces, so the test-sized budget takes over a minute in a \
+                 debug build; checked at 100 particles for finite, non-negative output only",
+    },
+    Exception {
+        method: "mc-radiosity",
+        case: "furnace sphere ρ=0.999",
+        expect: Expect::Finite,
+        overrides: &[("particles_per_step", "100"), ("max_steps", "1")],
+        // At the test-sized budget it passed: 4.8e-3 against a bound of 2.1e-2, in 64 s.
+        reason: "random walks last 1000 bounces (as for the cube); checked at 100 particles for finite, \
+                 non-negative output only",
+    },
+    Exception {
+        method: "hierarchical",
+        case: "energy balance",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 6.0e-4 against 3e-4 (2026-11-30).
+        reason: "source-side averaging conserves energy only up to the refinement's accuracy (crate \
+                 documentation: about 1e-4 at these settings on a closed box, its test's bound 3e-4); this room \
+                 is 6 times that",
+    },
+    Exception {
+        method: "hierarchical",
+        case: "emitters 1e6 apart: balance",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 5.8e-4 against 3e-4 (2026-11-30).
+        reason: "as for the energy balance: source-side averaging, about 6 times the crate's stated 1e-4",
+    },
+    Exception {
+        method: "hierarchical",
+        case: "scale 1e-4 and 1e4",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 5.8e-3 at the table's settings, 1.7e-2 at its defaults with leaves ≥ h/4 (2026-11-30); the
+        // lengths (`*_size`) are scaled with the scene.
+        reason: "the answer changes with the scene's scale: some length or area in its refinement or linking \
+                 is absolute (a bug to fix in radlab-hierarchical)",
+    },
+];
+
+fn exception(method: &str, case: &str) -> Option<&'static Exception> {
+    EXCEPTIONS
+        .iter()
+        .find(|e| e.method == method && e.case == case)
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Scenes.
+
+fn material(b: &mut SceneBuilder, name: &str, rho: f64, e: f64) -> u32 {
+    b.add_material(Material::new(name, Rgb::splat(rho), Rgb::splat(e)).expect("material"))
+        .expect("material")
+}
+
+/// An n × n grid of quads over o + s u + t v (s, t ∈ [0, 1]), normal along u × v.
+fn grid(b: &mut SceneBuilder, o: DVec3, u: DVec3, v: DVec3, n: usize, m: u32) {
+    for j in 0..n {
+        for i in 0..n {
+            let p = |di: usize, dj: usize| {
+                o + u * ((i + di) as f64 / n as f64) + v * ((j + dj) as f64 / n as f64)
+            };
+            b.add_polygon_points(&[p(0, 0), p(1, 0), p(1, 1), p(0, 1)], m, "grid")
+                .expect("quad");
+        }
+    }
+}
+
+/// The six faces of the box [lo, hi] as (origin, u, v) with u × v pointing outward (or inward).
+fn box_sides(lo: DVec3, hi: DVec3, outward: bool) -> Vec<(DVec3, DVec3, DVec3)> {
+    let d = hi - lo;
+    let (x, y, z) = (dvec3(d.x, 0., 0.), dvec3(0., d.y, 0.), dvec3(0., 0., d.z));
+    let sides = [
+        (lo, y, x),     // z = lo, normal −z
+        (lo + z, x, y), // z = hi, +z
+        (lo, z, y),     // x = lo, −x
+        (lo + x, y, z), // x = hi, +x
+        (lo, x, z),     // y = lo, −y
+        (lo + y, z, x), // y = hi, +y
+    ];
+    sides
+        .into_iter()
+        .map(|(o, u, v)| if outward { (o, u, v) } else { (o, v, u) })
+        .collect()
+}
+
+fn add_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3, n: usize, m: u32, outward: bool) {
+    for (o, u, v) in box_sides(lo, hi, outward) {
+        grid(b, o, u, v, n, m);
+    }
+}
+
+/// A furnace cube of edge 1 (inward faces, 2 × 2 quads per side, h = 0.5) whose z = 0 side is replaced by
+/// `floor` (a list of polygons covering the unit square).
+fn furnace_with_floor(rho: f64, floor: &[Vec<DVec3>]) -> Scene {
+    let mut b = SceneBuilder::new("furnace variant");
+    let m = material(&mut b, "furnace", rho, 1.0);
+    for (k, (o, u, v)) in box_sides(DVec3::ZERO, DVec3::ONE, false)
+        .into_iter()
+        .enumerate()
+    {
+        if k == 0 {
+            for p in floor {
+                b.add_polygon_points(p, m, "floor").expect("floor");
+            }
+        } else {
+            grid(&mut b, o, u, v, 2, m);
+        }
+    }
+    b.build().expect("scene")
+}
+
+/// The closed unit room (inward faces, 2 × 2 quads per side, h = 0.5) with coloured reflectances; one ceiling
+/// quad is the light (so every face's back is inside a wall and nothing is absorbed by a back); `extra` adds
+/// objects. Every reflectance is positive.
+fn room(name: &str, extra: &dyn Fn(&mut SceneBuilder)) -> Scene {
+    let mut b = SceneBuilder::new(name);
+    let refl = [0.7, 0.4, 0.5, 0.6, 0.5, 0.3];
+    let light = material(&mut b, "light", 0.3, 10.0);
+    for (k, (o, u, v)) in box_sides(DVec3::ZERO, DVec3::ONE, false)
+        .into_iter()
+        .enumerate()
+    {
+        let m = material(&mut b, &format!("wall{k}"), refl[k], 0.0);
+        for j in 0..2 {
+            for i in 0..2 {
+                let p = |di: usize, dj: usize| {
+                    o + u * ((i + di) as f64 / 2.0) + v * ((j + dj) as f64 / 2.0)
+                };
+                // The ceiling (side 1, z = 1) has its quad nearest the origin as the light.
+                let mat = if k == 1 && i == 0 && j == 0 { light } else { m };
+                b.add_polygon_points(&[p(0, 0), p(1, 0), p(1, 1), p(0, 1)], mat, "room")
+                    .expect("quad");
+            }
+        }
+    }
+    extra(&mut b);
+    b.build().expect("scene")
+}
+
+/// A closed box (outward faces) on [lo, hi] with a closed unlit interior: inward faces inset by 1e-3 of its size.
+fn hollow_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3) {
+    let m = material(b, "box", 0.6, 0.0);
+    add_box(b, lo, hi, 1, m, true);
+    let inside = material(b, "interior", 0.9, 0.0);
+    let inset = 1e-3 * (hi - lo).max_element();
+    add_box(b, lo + inset, hi - inset, 1, inside, false);
+}
+
+fn scaled(scene: &Scene, s: f64) -> Scene {
+    let mut b = SceneBuilder::new(&format!("{} x {s}", scene.name));
+    let mut mats = Vec::new();
+    for f in 0..scene.face_count() {
+        let mat = scene.material(f);
+        let id = match mats.iter().position(|n: &String| *n == mat.name) {
+            Some(i) => i as u32,
+            None => {
+                mats.push(mat.name.clone());
+                b.add_material(mat.clone()).expect("material")
+            }
+        };
+        let pts: Vec<DVec3> = scene.polygon(f).vertices().iter().map(|p| *p * s).collect();
+        b.add_polygon_points(&pts, id, "scaled").expect("face");
+    }
+    b.build().expect("scene")
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Running a method.
+
+/// Radiosity at `points` for each seed (1..=seeds), or why the run failed.
+fn solve(
+    m: &MethodInfo,
+    scene: &Scene,
+    accel: &Accel,
+    params: &toml::Table,
+    seeds: u64,
+    points: &[(FaceId, DVec3)],
+) -> Result<Vec<Vec<Rgb>>, String> {
+    (1..=seeds)
+        .map(|seed| {
+            let mut s: Box<dyn Solver + '_> =
+                (m.build)(scene, accel, params.clone(), seed).map_err(|e| format!("build: {e}"))?;
+            let mut converged = false;
+            for _ in 0..MAX_STEPS {
+                if s.step().map_err(|e| format!("step: {e}"))? == Step::Converged {
+                    converged = true;
+                    break;
+                }
+            }
+            if !converged {
+                return Err(format!("not converged after {MAX_STEPS} steps"));
+            }
+            let sol = s.solution();
+            Ok(points
+                .iter()
+                .map(|&(f, p)| sol.radiosity_at(f, p))
+                .collect())
+        })
+        .collect()
+}
+
+/// Mean over runs and the standard error of that mean per point (zero for one run).
+fn mean_and_se(runs: &[Vec<Rgb>]) -> (Vec<Rgb>, Vec<Rgb>) {
+    let k = runs.len() as f64;
+    let n = runs[0].len();
+    let mean: Vec<Rgb> = (0..n)
+        .map(|i| runs.iter().map(|r| r[i]).sum::<Rgb>() / k)
+        .collect();
+    let se = (0..n)
+        .map(|i| {
+            if runs.len() < 2 {
+                return Rgb::ZERO;
+            }
+            let var = runs
+                .iter()
+                .map(|r| (r[i] - mean[i]) * (r[i] - mean[i]))
+                .sum::<Rgb>()
+                / (k - 1.0);
+            (var / k).map(f64::sqrt)
+        })
+        .collect();
+    (mean, se)
+}
+
+/// The points of the scene's evaluation set, as (face, point).
+fn eval_points(scene: &Scene) -> Vec<(FaceId, DVec3)> {
+    evaluation_points(scene, POINTS, 1)
+        .iter()
+        .map(|p| (p.face, p.point))
+        .collect()
+}
+
+/// An m × m grid of points (cell centres in the face's parameters) on face `f`, with the area each stands for.
+fn face_grid(scene: &Scene, f: FaceId, m: usize) -> Vec<(FaceId, DVec3, f64)> {
+    let poly = scene.polygon(f);
+    let w = scene.faces[f].area / (m * m) as f64;
+    let mut out = Vec::with_capacity(m * m);
+    for j in 0..m {
+        for i in 0..m {
+            let (s, t) = ((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
+            out.push((f, poly.point_at(s, t), w));
+        }
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Outcomes and the table.
+
+/// The result of one method on one case.
+struct Outcome {
+    /// The case's error measure (relative unless the case says otherwise).
+    measured: f64,
+    /// Its derived bound.
+    bound: f64,
+    /// Every value finite and non-negative.
+    sane: bool,
+    /// Why it could not run, if it could not.
+    failure: Option<String>,
+}
+
+impl Outcome {
+    fn pass(&self) -> bool {
+        self.failure.is_none() && self.sane && self.measured <= self.bound
+    }
+    fn failed(why: String) -> Self {
+        Self {
+            measured: f64::NAN,
+            bound: f64::NAN,
+            sane: false,
+            failure: Some(why),
+        }
+    }
+}
+
+fn sane(values: &[Rgb]) -> bool {
+    values
+        .iter()
+        .all(|v| v.is_finite() && v.min_element() >= 0.0)
+}
+
+/// One section of the method × case table.
+struct Report {
+    title: &'static str,
+    lines: String,
+    failures: Vec<String>,
+}
+
+impl Report {
+    fn new(title: &'static str) -> Self {
+        Self {
+            title,
+            lines: String::new(),
+            failures: Vec::new(),
+        }
+    }
+
+    /// Records an outcome, applying the exception list; the closure re-runs the case with overrides.
+    fn record(
+        &mut self,
+        method: &str,
+        case: &str,
+        outcome: impl Fn(&toml::Table) -> Outcome,
+        params: &toml::Table,
+    ) {
+        let started = std::time::Instant::now();
+        let cell = match exception(method, case) {
+            None => {
+                let o = outcome(params);
+                if !o.pass() {
+                    self.failures.push(format!(
+                        "{method} / {case}: measured {:.3e}, bound {:.3e}, finite and non-negative {}{}",
+                        o.measured,
+                        o.bound,
+                        o.sane,
+                        o.failure.as_deref().map(|f| format!(", {f}")).unwrap_or_default()
+                    ));
+                }
+                describe(&o)
+            }
+            Some(x) => {
+                let mut p = params.clone();
+                for (k, v) in x.overrides {
+                    p.insert((*k).to_string(), radlab_scene::params::parse_value(v));
+                }
+                let o = outcome(&p);
+                let holds = match x.expect {
+                    Expect::Misses => o.failure.is_none() && o.sane && o.measured > o.bound,
+                    Expect::Finite => o.failure.is_none() && o.sane,
+                };
+                if !holds {
+                    self.failures.push(format!(
+                        "{method} / {case}: the listed exception ({:?}: {}) no longer holds as stated: {} \
+                         — update or remove it",
+                        x.expect,
+                        x.reason,
+                        describe(&o)
+                    ));
+                }
+                format!("exception: {} — {}", describe(&o), x.reason)
+            }
+        };
+        let _ = writeln!(
+            self.lines,
+            "| {method} | {case} | {cell} | {:.1} s |",
+            started.elapsed().as_secs_f64()
+        );
+    }
+
+    fn finish(self) {
+        println!(
+            "\n### {}\n\n| method | case | result (measured / bound) | time |\n|---|---|---|---|\n{}",
+            self.title, self.lines
+        );
+        assert!(
+            self.failures.is_empty(),
+            "{} failure(s):\n{}",
+            self.failures.len(),
+            self.failures.join("\n")
+        );
+    }
+}
+
+fn describe(o: &Outcome) -> String {
+    if let Some(f) = &o.failure {
+        return format!("FAIL: {f}");
+    }
+    let verdict = if o.pass() { "pass" } else { "FAIL" };
+    let sanity = if o.sane {
+        ""
+    } else {
+        ", negative or non-finite values"
+    };
+    format!("{verdict} {:.2e} / {:.2e}{sanity}", o.measured, o.bound)
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Case evaluations.
+
+/// Largest relative deviation from a uniform exact value over the points, against 1 % plus three standard
+/// errors of the runs' mean.
+fn uniform_case(
+    m: &MethodInfo,
+    scene: &Scene,
+    exact: f64,
+    params: &toml::Table,
+    seeds: u64,
+    extra_points: &[(FaceId, DVec3)],
+) -> Outcome {
+    let accel = Accel::new(scene);
+    let mut points = eval_points(scene);
+    points.extend_from_slice(extra_points);
+    match solve(m, scene, &accel, params, seeds, &points) {
+        Err(e) => Outcome::failed(e),
+        Ok(runs) => {
+            let (mean, se) = mean_and_se(&runs);
+            let measured = mean
+                .iter()
+                .map(|b| (*b - Rgb::splat(exact)).abs().max_element() / exact)
+                .fold(0.0, f64::max);
+            let noise = se.iter().map(|s| s.max_element()).fold(0.0, f64::max) / exact;
+            Outcome {
+                measured,
+                bound: 0.01 + 3.0 * noise,
+                sane: runs.iter().all(|r| sane(r)),
+                failure: None,
+            }
+        }
+    }
+}
+
+/// Exact direct radiosity ρ E F_{dx→emitters} at a receiver point, and its gradient magnitude (central
+/// differences in the receiver's plane).
+fn direct(scene: &Scene, f: FaceId, x: DVec3) -> (f64, f64) {
+    let n = scene.faces[f].normal;
+    let rho = scene.reflectance(f).x;
+    let field = |p: DVec3| -> f64 {
+        scene
+            .emitters()
+            .into_iter()
+            .map(|e| scene.emission(e).x * point_polygon(p, n, &scene.polygon(e)))
+            .sum::<f64>()
+            * rho
+    };
+    let d = 1e-5 * scene.diagonal();
+    let t1 = n.any_orthonormal_vector();
+    let t2 = n.cross(t1);
+    let g1 = (field(x + d * t1) - field(x - d * t1)) / (2.0 * d);
+    let g2 = (field(x + d * t2) - field(x - d * t2)) / (2.0 * d);
+    (field(x), (g1 * g1 + g2 * g2).sqrt())
+}
+
+fn howell_case(m: &MethodInfo, scene: &Scene, h: f64, params: &toml::Table, seeds: u64) -> Outcome {
+    let accel = Accel::new(scene);
+    let points = eval_points(scene);
+    match solve(m, scene, &accel, params, seeds, &points) {
+        Err(e) => Outcome::failed(e),
+        Ok(runs) => {
+            let (mean, se) = mean_and_se(&runs);
+            let (mut err, mut total, mut grad, mut noise) = (0.0, 0.0, 0.0, 0.0);
+            for (k, &(f, x)) in points.iter().enumerate() {
+                let (b, g) = direct(scene, f, x);
+                err += (mean[k].x - b).abs();
+                total += b;
+                grad += g;
+                noise += se[k].x;
+            }
+            let diameter = std::f64::consts::SQRT_2 * h;
+            Outcome {
+                measured: err / total,
+                bound: (diameter * grad + 3.0 * noise) / total,
+                sane: runs.iter().all(|r| sane(r)),
+                failure: None,
+            }
+        }
+    }
+}
+
+/// Relative energy imbalance |absorbed − emitted| / emitted (worst channel) on a closed scene whose faces are
+/// all reflective, integrating over a 16 × 16 grid of cell centres per input face: exact for piecewise-constant
+/// elements that tile each face in 2^k × 2^k for k ≤ 4 (the table keeps every method's elements that coarse).
+fn balance_case(m: &MethodInfo, scene: &Scene, s: &Settings, params: &toml::Table) -> Outcome {
+    let accel = Accel::new(scene);
+    let mut grid_pts = Vec::new();
+    for f in 0..scene.face_count() {
+        grid_pts.extend(face_grid(scene, f, 16));
+    }
+    let points: Vec<(FaceId, DVec3)> = grid_pts.iter().map(|&(f, p, _)| (f, p)).collect();
+    match solve(m, scene, &accel, params, s.seeds, &points) {
+        Err(e) => Outcome::failed(e),
+        Ok(runs) => {
+            let phi = scene.emitted_power();
+            let absorbed_of = |b: &[Rgb]| -> Rgb {
+                grid_pts
+                    .iter()
+                    .zip(b)
+                    .map(|(&(f, _, w), &b)| {
+                        let rho = scene.reflectance(f);
+                        w * (Rgb::ONE - rho) * (b - scene.emission(f)) / rho
+                    })
+                    .sum()
+            };
+            let per_run: Vec<Rgb> = runs.iter().map(|r| absorbed_of(r)).collect();
+            let k = per_run.len() as f64;
+            let mean = per_run.iter().copied().sum::<Rgb>() / k;
+            let se = if per_run.len() > 1 {
+                let var = per_run
+                    .iter()
+                    .map(|a| (*a - mean) * (*a - mean))
+                    .sum::<Rgb>()
+                    / (k - 1.0);
+                (var / k).map(f64::sqrt)
+            } else {
+                Rgb::ZERO
+            };
+            let measured = ((mean - phi) / phi).abs().max_element();
+            Outcome {
+                measured,
+                bound: s.balance + 3.0 * (se / phi).max_element(),
+                sane: runs.iter().all(|r| sane(r)),
+                failure: None,
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The tests: one per group of cases, each printing its part of the table.
+
+const FURNACE_RHOS: [f64; 5] = [0.0, 0.5, 0.9, 0.99, 0.999];
+
+#[test]
+fn furnaces() {
+    let mut r = Report::new("Furnaces: B = E/(1 − ρ), max relative error over the points");
+    for m in methods() {
+        let s = settings(m.name);
+        for rho in FURNACE_RHOS {
+            let cube =
+                builtin(&format!("furnace-cube?reflectance={rho}&tessellation=2")).expect("cube");
+            let exact = 1.0 / (1.0 - rho);
+            r.record(
+                m.name,
+                &format!("furnace cube ρ={rho}"),
+                |p| uniform_case(&m, &cube, exact, p, s.seeds, &[]),
+                &(s.params)(0.5),
+            );
+            let sphere = builtin(&format!("furnace-sphere?reflectance={rho}&tessellation=2"))
+                .expect("sphere");
+            let h = sphere.polygon(0).max_edge();
+            r.record(
+                m.name,
+                &format!("furnace sphere ρ={rho}"),
+                |p| uniform_case(&m, &sphere, exact, p, s.seeds, &[]),
+                &(s.params)(h),
+            );
+        }
+    }
+    r.finish();
+}
+
+#[test]
+fn howell_plates_under_direct_light() {
+    let mut r = Report::new(
+        "Howell's plates: relative L1 error against ρ E F_{dx→emitter}, bound d Σ|∇B| / Σ B (+ noise)",
+    );
+    let n = 8;
+    let h = 1.0 / n as f64;
+    let parallel = builtin(&format!("parallel-squares?tessellation={n}")).expect("parallel");
+    let perpendicular =
+        builtin(&format!("perpendicular-squares?tessellation={n}")).expect("perpendicular");
+    for m in methods() {
+        let s = settings(m.name);
+        let p = (s.params)(h);
+        r.record(
+            m.name,
+            "parallel squares",
+            |p| howell_case(&m, &parallel, h, p, s.seeds),
+            &p,
+        );
+        r.record(
+            m.name,
+            "perpendicular squares",
+            |p| howell_case(&m, &perpendicular, h, p, s.seeds),
+            &p,
+        );
+    }
+    r.finish();
+}
+
+#[test]
+fn energy_balance_and_bright_emitters() {
+    let mut r = Report::new(
+        "Closed convex room: |absorbed − emitted| / emitted against the method's stated tolerance (+ noise)",
+    );
+    let plain = room("room", &|_| {});
+    // A second emitter 1e6 times dimmer than the light: the floor quad nearest the origin (face 0).
+    let bright = {
+        let mut b = SceneBuilder::new("room with a dim emitter");
+        let dim = material(&mut b, "dim", 0.5, 1e-5);
+        for f in 0..plain.face_count() {
+            let mat = plain.material(f).clone();
+            let id = if f == 0 {
+                dim
+            } else {
+                b.add_material(Material {
+                    name: format!("{}#{f}", mat.name),
+                    ..mat
+                })
+                .expect("material")
+            };
+            b.add_polygon_points(plain.polygon(f).vertices(), id, "room")
+                .expect("face");
+        }
+        b.build().expect("scene")
+    };
+    assert!(bright.faces[0].normal.z > 0.5 && bright.emission(0).x == 1e-5);
+    for m in methods() {
+        let s = settings(m.name);
+        let p = (s.params)(0.5);
+        r.record(
+            m.name,
+            "energy balance",
+            |p| balance_case(&m, &plain, &s, p),
+            &p,
+        );
+        r.record(
+            m.name,
+            "emitters 1e6 apart: balance",
+            |p| balance_case(&m, &bright, &s, p),
+            &p,
+        );
+        // On each emitter B = E + ρ H ≥ E: the dim one must not lose its own emission under the bright one.
+        r.record(
+            m.name,
+            "emitters 1e6 apart: B ≥ E on the dim emitter",
+            |p| {
+                let accel = Accel::new(&bright);
+                let f = 0;
+                let pts: Vec<_> = face_grid(&bright, f, 3)
+                    .into_iter()
+                    .map(|(f, x, _)| (f, x))
+                    .collect();
+                match solve(&m, &bright, &accel, p, 1, &pts) {
+                    Err(e) => Outcome::failed(e),
+                    Ok(runs) => {
+                        let e = bright.emission(f).x;
+                        // Zero when B ≥ E everywhere on it.
+                        let shortfall = runs[0]
+                            .iter()
+                            .map(|b| (e - b.min_element()) / e)
+                            .fold(0.0, f64::max);
+                        Outcome {
+                            measured: shortfall,
+                            bound: 0.0,
+                            sane: sane(&runs[0]),
+                            failure: None,
+                        }
+                    }
+                }
+            },
+            &p,
+        );
+    }
+    r.finish();
+}
+
+#[test]
+fn threads_and_scale() {
+    let mut r = Report::new(
+        "Determinism and scale: 1 vs 2 threads (bitwise differences), scene × 1e-4 and × 1e4 (max relative \
+         difference, bound 1e-9)",
+    );
+    let base = room("room with a block", &|b| {
+        let m = material(b, "block", 0.5, 0.0);
+        add_box(b, dvec3(0.3, 0.3, 0.0), dvec3(0.6, 0.5, 0.4), 1, m, true);
+    });
+    for m in methods() {
+        let s = settings(m.name);
+        let p = (s.params)(0.5);
+        r.record(
+            m.name,
+            "1 vs 2 threads",
+            |p| {
+                let accel = Accel::new(&base);
+                let points = eval_points(&base);
+                let run = |threads: usize| {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .expect("pool");
+                    pool.install(|| solve(&m, &base, &accel, p, 1, &points))
+                };
+                match (run(1), run(2)) {
+                    (Ok(a), Ok(b)) => {
+                        let differ = a[0]
+                            .iter()
+                            .zip(&b[0])
+                            .filter(|(x, y)| {
+                                x.to_array().map(f64::to_bits) != y.to_array().map(f64::to_bits)
+                            })
+                            .count();
+                        Outcome {
+                            measured: differ as f64,
+                            bound: 0.0,
+                            sane: sane(&a[0]),
+                            failure: None,
+                        }
+                    }
+                    (Err(e), _) | (_, Err(e)) => Outcome::failed(e),
+                }
+            },
+            &p,
+        );
+        r.record(
+            m.name,
+            "scale 1e-4 and 1e4",
+            |p| {
+                let accel = Accel::new(&base);
+                let points = eval_points(&base);
+                let reference = match solve(&m, &base, &accel, p, 1, &points) {
+                    Ok(r) => r.into_iter().next().expect("one run"),
+                    Err(e) => return Outcome::failed(e),
+                };
+                let scale_b = reference
+                    .iter()
+                    .map(|b| b.max_element())
+                    .fold(0.0, f64::max);
+                let mut worst: f64 = 0.0;
+                let mut all_sane = sane(&reference);
+                for k in [1e-4, 1e4] {
+                    let sc = scaled(&base, k);
+                    let accel = Accel::new(&sc);
+                    let pts: Vec<_> = points.iter().map(|&(f, x)| (f, x * k)).collect();
+                    // Lengths in the parameters (named `*_size` in every method) scale with the scene.
+                    let mut pk = p.clone();
+                    for (name, v) in pk.iter_mut() {
+                        if let (true, toml::Value::Float(x)) = (name.ends_with("_size"), v) {
+                            *x *= k;
+                        }
+                    }
+                    match solve(&m, &sc, &accel, &pk, 1, &pts) {
+                        Ok(run) => {
+                            all_sane &= sane(&run[0]);
+                            for (a, b) in run[0].iter().zip(&reference) {
+                                worst = worst.max((*a - *b).abs().max_element() / scale_b);
+                            }
+                        }
+                        Err(e) => return Outcome::failed(e),
+                    }
+                }
+                Outcome {
+                    measured: worst,
+                    bound: 1e-9,
+                    sane: all_sane,
+                    failure: None,
+                }
+            },
+            &p,
+        );
+    }
+    r.finish();
+}
+
+/// Points over every face of `scene` whose material is `name` (3 × 3 per face).
+fn points_on(scene: &Scene, name: &str) -> Vec<(FaceId, DVec3)> {
+    (0..scene.face_count())
+        .filter(|&f| scene.material(f).name == name)
+        .flat_map(|f| face_grid(scene, f, 3))
+        .map(|(f, x, _)| (f, x))
+        .collect()
+}
+
+/// Closed unlit interiors: the largest radiosity found inside (must be exactly 0), plus sanity everywhere.
+fn interior_case(m: &MethodInfo, scene: &Scene, params: &toml::Table, seeds: u64) -> Outcome {
+    let accel = Accel::new(scene);
+    let inside = points_on(scene, "interior");
+    assert!(!inside.is_empty());
+    let mut points = eval_points(scene);
+    let n_eval = points.len();
+    points.extend_from_slice(&inside);
+    match solve(m, scene, &accel, params, seeds, &points) {
+        Err(e) => Outcome::failed(e),
+        Ok(runs) => {
+            let mut measured: f64 = 0.0;
+            for r in &runs {
+                let lit = r[..n_eval]
+                    .iter()
+                    .map(|b| b.max_element())
+                    .fold(0.0, f64::max);
+                for b in &r[n_eval..] {
+                    measured = measured.max(b.abs().max_element() / lit.max(1e-300));
+                }
+            }
+            Outcome {
+                measured,
+                bound: 0.0,
+                sane: runs.iter().all(|r| sane(r)),
+                failure: None,
+            }
+        }
+    }
+}
+
+#[test]
+fn extremes() {
+    let mut r = Report::new(
+        "Extremes: interiors (largest interior B / largest lit B, must be 0), furnaces with a sliver or a fan \
+         (max relative error, 1 %), emitter facing away (max deviation from E on it and 0 elsewhere, relative to E)",
+    );
+    let above = room("box 1e-6 above the floor", &|b| {
+        hollow_box(b, dvec3(0.2, 0.2, 1e-6), dvec3(0.5, 0.5, 0.3));
+    });
+    let touching = room("boxes touching walls", &|b| {
+        // Flush against the x = 0 wall and the floor; and in the corner x = 1, y = 1 on the floor.
+        hollow_box(b, dvec3(0.0, 0.3, 0.0), dvec3(0.25, 0.6, 0.3));
+        hollow_box(b, dvec3(0.7, 0.7, 0.0), dvec3(1.0, 1.0, 0.5));
+    });
+    let rho = 0.9;
+    let sliver = furnace_with_floor(
+        rho,
+        &[
+            vec![
+                dvec3(0., 0., 0.),
+                dvec3(1e-4, 0., 0.),
+                dvec3(1e-4, 1., 0.),
+                dvec3(0., 1., 0.),
+            ],
+            vec![
+                dvec3(1e-4, 0., 0.),
+                dvec3(1., 0., 0.),
+                dvec3(1., 1., 0.),
+                dvec3(1e-4, 1., 0.),
+            ],
+        ],
+    );
+    assert_eq!(sliver.face_count(), 5 * 4 + 2, "the sliver must be kept");
+    // A fan around the floor's centre over its boundary, with one extra boundary point 1e-7 from a corner: that
+    // triangle's area is 2.5e-8 (5e-8 of its squared diameter), just above the scene's degenerate threshold.
+    let c = dvec3(0.5, 0.5, 0.0);
+    let ring = [
+        dvec3(0., 0., 0.),
+        dvec3(0., 1., 0.),
+        dvec3(1., 1., 0.),
+        dvec3(1., 1e-7, 0.),
+        dvec3(1., 0., 0.),
+    ];
+    let fan: Vec<Vec<DVec3>> = (0..ring.len())
+        .map(|k| vec![c, ring[(k + 1) % ring.len()], ring[k]])
+        .collect();
+    let fan_scene = furnace_with_floor(rho, &fan);
+    assert_eq!(
+        fan_scene.face_count(),
+        5 * 4 + 5,
+        "the fan must be kept whole"
+    );
+    // The floor's faces come first: the tiny triangle is (c, ring[4], ring[3]).
+    let tiny = 3;
+    let away = {
+        let mut b = SceneBuilder::new("emitter facing away");
+        let floor = material(&mut b, "floor", 0.5, 0.0);
+        grid(
+            &mut b,
+            DVec3::ZERO,
+            dvec3(1., 0., 0.),
+            dvec3(0., 1., 0.),
+            2,
+            floor,
+        );
+        let light = material(&mut b, "light", 0.5, 3.0);
+        // At z = 0.5 facing +z: its front sees nothing.
+        grid(
+            &mut b,
+            dvec3(0.25, 0.25, 0.5),
+            dvec3(0.5, 0., 0.),
+            dvec3(0., 0.5, 0.),
+            1,
+            light,
+        );
+        b.build().expect("scene")
+    };
+    for m in methods() {
+        let s = settings(m.name);
+        let p = (s.params)(0.5);
+        r.record(
+            m.name,
+            "closed box 1e-6 above the floor",
+            |p| interior_case(&m, &above, p, s.seeds),
+            &p,
+        );
+        r.record(
+            m.name,
+            "boxes touching walls",
+            |p| interior_case(&m, &touching, p, s.seeds),
+            &p,
+        );
+        let sliver_pt = [(0, dvec3(0.5e-4, 0.5, 0.0))];
+        r.record(
+            m.name,
+            "sliver (aspect 1e4) in a furnace",
+            |p| uniform_case(&m, &sliver, 1.0 / (1.0 - rho), p, s.seeds, &sliver_pt),
+            &p,
+        );
+        let tiny_pt = [(tiny, (c + ring[3] + ring[4]) / 3.0)];
+        r.record(
+            m.name,
+            "fan with a near-zero-area face in a furnace",
+            |p| uniform_case(&m, &fan_scene, 1.0 / (1.0 - rho), p, s.seeds, &tiny_pt),
+            &p,
+        );
+        r.record(
+            m.name,
+            "emitter facing away",
+            |p| {
+                let accel = Accel::new(&away);
+                let mut pts = points_on(&away, "floor");
+                let n_floor = pts.len();
+                pts.extend(points_on(&away, "light"));
+                match solve(&m, &away, &accel, p, s.seeds, &pts) {
+                    Err(e) => Outcome::failed(e),
+                    Ok(runs) => {
+                        let e = 3.0;
+                        let mut worst: f64 = 0.0;
+                        for r in &runs {
+                            for (k, b) in r.iter().enumerate() {
+                                let exact = if k < n_floor { 0.0 } else { e };
+                                worst = worst.max((*b - Rgb::splat(exact)).abs().max_element() / e);
+                            }
+                        }
+                        Outcome {
+                            measured: worst,
+                            bound: 1e-12,
+                            sane: runs.iter().all(|r| sane(r)),
+                            failure: None,
+                        }
+                    }
+                }
+            },
+            &p,
+        );
+    }
+    r.finish();
+}
