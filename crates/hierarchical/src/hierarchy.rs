@@ -68,6 +68,8 @@ where
     // Solver state.
     pub(crate) coarse_mu: Option<(Vec<Rgb>, Vec<T::Exitance>)>,
     pub(crate) coarse_denominator: Rgb,
+    /// Number of lit leaves when the coarse mode was computed.
+    pub(crate) coarse_support: usize,
     pub(crate) passes_since_change: u32,
     pub(crate) last_norm: Option<f64>,
     pub(crate) residual: Option<f64>,
@@ -115,6 +117,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             refine_changed: false,
             coarse_mu: None,
             coarse_denominator: Rgb::ZERO,
+            coarse_support: 0,
             passes_since_change: 0,
             last_norm: None,
             residual: None,

@@ -10,7 +10,8 @@
 //!
 //! This is one Jacobi sweep B ← E + M B of the hierarchical operator M = ρ ⊙ push ∘ gather ∘ pull. Close to
 //! ρ = 1 a sweep shrinks the error's slowest mode (nearly uniform over the scene) only by about ρ, so each pass
-//! adds a one-dimensional coarse correction along u = ρ (per channel), chosen so the area-weighted residual
+//! adds a one-dimensional coarse correction along u = ρ (per channel, on the leaves light has reached, so a
+//! closed unlit interior stays exactly dark), chosen so the area-weighted residual
 //! vanishes: c = Σ A r / Σ A (u − M u), B ← E + M (B + c u) — the error of the furnace's dominant mode is removed
 //! in one pass (a Petrov–Galerkin two-level step; it plays the role of Cohen et al.'s 1988 ambient term, but
 //! inside the iteration). The pass's size, ‖ΔB‖/‖B‖ (area-weighted L1 over leaves), and the observed
@@ -136,11 +137,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         if self.dirty.iter().any(|&d| d) {
             self.rebuild_rows();
         }
-        if self.coarse_mu.is_none() {
-            // The furnace mode: every leaf's response to a unit irradiance from all around.
+        // The coarse mode lives on the leaves light has reached: a closed interior that no light can enter
+        // stays exactly dark (its leaves may still link to each other).
+        let support = (0..self.nodes.len())
+            .filter(|&i| self.children[i].1 == 0 && self.radiosity[i].max_element() > 0.0)
+            .count();
+        if self.coarse_mu.is_none() || self.coarse_support != support {
+            // The furnace mode: every lit leaf's response to a unit irradiance from all around.
             let (mut u, mut ux): (Vec<Rgb>, Vec<T::Exitance>) = (0..self.nodes.len())
                 .map(|i| {
-                    if self.children[i].1 == 0 {
+                    if self.children[i].1 == 0 && self.radiosity[i].max_element() > 0.0 {
                         self.kernel.uniform_response(&self.nodes[i])
                     } else {
                         (Rgb::ZERO, T::Exitance::default())
@@ -152,6 +158,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             let denom = self.leaf_sum(&u) - self.leaf_sum(&mu);
             self.coarse_mu = Some((mu, mux));
             self.coarse_denominator = denom;
+            self.coarse_support = support;
         }
         let b = std::mem::take(&mut self.radiosity);
         let ((mut next, mut next_x), h) = self.apply(&b, &self.exitance, true);

@@ -19,7 +19,7 @@ use radlab_hierarchical::{
 };
 use radlab_scene::{Accel, Rgb, form_factor::VisibilitySampling};
 
-use crate::cluster_link::{centroid_geometry, cluster_link};
+use crate::cluster_link::{centroid_geometry, cluster_link, face_visibility};
 use crate::cluster_node::ClusterNode;
 
 /// What a transfer mode decides: where a cluster receiver's links are evaluated, what a cluster source sends,
@@ -150,13 +150,18 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
         match target {
             ClusterNode::Cluster(_) => M::at_cluster(link.coefficient, d),
             ClusterNode::Patch(p) => {
-                // At the receiver the link's own distance; at a face below a cluster, the face's own.
+                // At the receiver the link's own distance and visibility; at a face below a cluster, the
+                // face's own distance and visibility.
+                let cos = p.normal.dot(-d).max(0.0);
                 let g = if at_receiver {
                     link.coefficient
+                } else if cos > 0.0 {
+                    face_visibility(self.accel, self.visibility, self.seed, target, src)
+                        / (std::f64::consts::PI * r2)
                 } else {
-                    link.visibility as f64 / (std::f64::consts::PI * r2)
+                    0.0
                 };
-                M::scalar(g * p.normal.dot(-d).max(0.0))
+                M::scalar(g * cos)
             }
         }
     }
