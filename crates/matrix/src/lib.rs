@@ -71,8 +71,8 @@ mod solver;
 
 pub use assembly::{PAIRS_PER_STEP, predicted_element_count, required_bytes};
 pub use params::{
-    DEFAULT_MAX_ITERATIONS, DEFAULT_MEMORY_BUDGET_MIB, DEFAULT_QUADRATURE, DEFAULT_TOLERANCE,
-    Iteration, MAX_QUADRATURE, MatrixParams,
+    DEFAULT_MAX_ITERATIONS, DEFAULT_MEMORY_BUDGET_MIB, DEFAULT_QUADRATURE, DEFAULT_RECONSTRUCTION,
+    DEFAULT_TOLERANCE, Iteration, MAX_QUADRATURE, MatrixParams,
 };
 pub use radlab_scene::form_factor::VisibilitySampling;
 pub use solver::MatrixSolver;

@@ -24,6 +24,14 @@
 //! the noise is that of plain path tracing; near-white enclosures make paths long; the standard error of a
 //! heavy-tailed estimate (small bright emitters seen by a few paths) is itself uncertain at low sample counts.
 //!
+//! ### Path tracing as a method ([`PathTraceSolver`])
+//!
+//! The same estimator stepped at a given set of query points (the experiment's evaluation points, or `probe`'s):
+//! each step adds paths to every point, `initial_samples` (default 16) then doubling up to `samples` (default
+//! 1024), so its error against time can be traced beside the finite-element methods'. Its cost is per point:
+//! time and rays grow linearly with the number of points answered. Its streams are keyed by its own seed mixed
+//! with [`METHOD_STREAM_TAG`], never the reference's.
+//!
 //! ## 2. Camera path tracing ([`render`])
 //!
 //! The same estimator through the pixels of a pinhole [`Camera`]: radiance B/π of the surface each jittered
@@ -72,6 +80,7 @@ mod emitter_sampling;
 mod mesh_radiosity;
 mod path_estimator;
 mod point_estimator;
+mod point_solver;
 mod random_walk;
 mod running_stats;
 mod stochastic_jacobi;
@@ -79,6 +88,7 @@ mod stochastic_jacobi;
 pub use camera_render::{RenderParams, render};
 pub use mesh_radiosity::{McMethod, McRadiosityParams, McRadiositySolver};
 pub use path_estimator::DirectSampling;
+pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver};
 pub use point_estimator::{
     DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
     estimate_points, estimate_points_with_progress,

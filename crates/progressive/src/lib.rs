@@ -43,6 +43,7 @@
 //! | `min_element_size` | `element_size` / 4 | smallest edge subdivision creates |
 //! | `ambient` | false | add the ambient term to displayed radiosity (keep off when measuring error) |
 //! | `memory_budget_mib` | 2048 | refuse meshes and refinements needing more |
+//! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (see below) |
 //!
 //! Every default length is relative to the scene's size, the threshold is a relative contrast and the stopping
 //! rule a fraction of emitted power, so the defaults behave the same at any scene scale and light level.
@@ -90,5 +91,5 @@ mod shooting;
 mod solver;
 mod substructuring;
 
-pub use params::ProgressiveParams;
+pub use params::{DEFAULT_RECONSTRUCTION, ProgressiveParams};
 pub use solver::{ElementView, ProgressiveSolution, ProgressiveSolver, StopReason};

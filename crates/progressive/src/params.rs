@@ -6,7 +6,7 @@
 //! emitted power, so neither depends on the scene's scale or on its light's strength.
 
 use radlab_scene::form_factor::VisibilitySampling;
-use radlab_scene::{MethodParams, Scene, SolveError, default_element_size};
+use radlab_scene::{MethodParams, Reconstruction, Scene, SolveError, default_element_size};
 use serde::{Deserialize, Serialize};
 
 /// Default shooting patch size as a multiple of the element size: each patch shoots from about 2 × 2 elements.
@@ -56,7 +56,13 @@ pub struct ProgressiveParams {
     pub ambient: bool,
     /// Memory the solver may hold (MiB); a mesh or refinement beyond it is an error. Default 2048.
     pub memory_budget_mib: f64,
+    /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
+    /// `final-gather` (radlab_scene::reconstruction). Default [`DEFAULT_RECONSTRUCTION`].
+    pub reconstruction: Reconstruction,
 }
+
+/// Default reconstruction of point answers, chosen by measurement (see the crate documentation).
+pub const DEFAULT_RECONSTRUCTION: Reconstruction = Reconstruction::FinalGather;
 
 impl Default for ProgressiveParams {
     fn default() -> Self {
@@ -74,6 +80,7 @@ impl Default for ProgressiveParams {
             min_element_size: None,
             ambient: false,
             memory_budget_mib: DEFAULT_MEMORY_BUDGET_MIB,
+            reconstruction: DEFAULT_RECONSTRUCTION,
         }
     }
 }
@@ -222,6 +229,12 @@ impl MethodParams for ProgressiveParams {
                 "memory_budget_mib",
                 "memory the solver may hold, MiB (default 2048)",
             ),
+            (
+                "reconstruction",
+                "point answers from the element values: constant | gouraud (vertex-interpolated) | \
+                 final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
+                 answering cost); default final-gather",
+            ),
         ]
     }
 
@@ -325,6 +338,7 @@ mod tests {
             ("memory_budget_mib", "0"),
             ("visibility", "sometimes"),
             ("shots_per_step", "-3"),
+            ("reconstruction", "smooth"),
         ] {
             let e = ProgressiveParams::from_pairs(&pairs(&[(k, v)]))
                 .expect_err(k)

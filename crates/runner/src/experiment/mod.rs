@@ -11,7 +11,7 @@ pub mod config;
 pub mod digest;
 pub mod execute;
 pub mod images;
-pub mod metrics;
+pub use radlab_scene::error_metric as metrics;
 pub mod plots;
 pub mod reference;
 pub mod report;
