@@ -173,6 +173,55 @@ mod tests {
     use super::*;
     use crate::{ElementMesh, builtin};
 
+    /// Howell B-3: differential area below the corner of a parallel a × b rectangle at height h.
+    fn corner(a: f64, b: f64, h: f64) -> f64 {
+        let (x, y) = (a / h, b / h);
+        (x / (1. + x * x).sqrt() * (y / (1. + x * x).sqrt()).atan()
+            + y / (1. + y * y).sqrt() * (x / (1. + y * y).sqrt()).atan())
+            / (2.0 * std::f64::consts::PI)
+    }
+
+    #[test]
+    fn exact_for_unoccluded_direct_light_between_parallel_plates() {
+        // Receiver z = 0 facing up, emitter 0.7 above facing down, both meshed 3 × 3; gathering from the
+        // emitter's exact elements (B = E, ρ = 0) gives B(x) = ρ E F(x → emitter) with F the sum of four
+        // corner rectangles (Howell B-3), whatever the visibility sampling (nothing occludes).
+        let (w, d, h, e, rho) = (1.0, 0.6, 0.7, 2.0, 0.4);
+        let scene = builtin(&format!(
+            "parallel-squares?width={w}&depth={d}&distance={h}&emission={e}&reflectance={rho}&tessellation=3"
+        ))
+        .expect("plates");
+        let accel = Accel::new(&scene);
+        let mesh = ElementMesh::new(&scene, 0.1);
+        let els: Vec<ElementValue> = mesh
+            .elements
+            .iter()
+            .map(|el| ElementValue {
+                face: el.face as usize,
+                polygon: el.polygon,
+                radiosity: scene.emission(el.face as usize),
+            })
+            .collect();
+        let g = FinalGather::new(&scene, &els, GatherSettings::with_seed(7));
+        let f_exact = |x: f64, y: f64| {
+            corner(x, y, h) + corner(w - x, y, h) + corner(x, d - y, h) + corner(w - x, d - y, h)
+        };
+        for (x, y) in [(0.5, 0.3), (0.1, 0.05), (0.93, 0.41), (0.0, 0.0)] {
+            let p = glam::dvec3(x, y, 0.0);
+            let f = (0..scene.faces.len())
+                .find(|&f| {
+                    !scene.material(f).is_emitter() && scene.polygon(f).contains(p, 1e-9)
+                })
+                .expect("a receiver face");
+            let b = g.radiosity_at(&scene, &accel, f, p);
+            let want = rho * e * f_exact(x, y);
+            assert!(
+                (b - Rgb::splat(want)).abs().max_element() < 1e-12 * want.max(1.0),
+                "({x}, {y}): {b} vs {want}"
+            );
+        }
+    }
+
     #[test]
     fn counts_its_work_and_skips_its_own_face() {
         let scene = builtin("furnace-cube?tessellation=2&reflectance=0.5").expect("furnace");

@@ -80,6 +80,9 @@ pub struct RunResult {
     pub wall_s: f64,
     /// CPU seconds in steps (all threads).
     pub cpu_s: f64,
+    /// Evaluation points the run was measured (and, for path tracing, traced) at.
+    #[serde(default)]
+    pub points: u64,
     /// Wall seconds of answering at the evaluation points once, after the last step (a final gather's cost;
     /// near zero for constant and Gouraud reconstructions and for path tracing, which traces in its steps).
     #[serde(default)]
@@ -202,6 +205,7 @@ fn base_result(job: &Job) -> RunResult {
         params: s.params_string(),
         sweep: s.sweep.clone(),
         seed: s.seed,
+        points: job.evaluation.points as u64,
         floor_l1: job.floor.l1,
         floor_l2: job.floor.l2,
         reference: format!("{:?}", job.reference_kind).to_lowercase(),
