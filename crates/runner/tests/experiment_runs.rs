@@ -310,15 +310,15 @@ fn config_errors_name_the_key() {
     assert!(!o.status.success() && text(&o).contains("missing.toml"));
 }
 
-/// Rows of a run's trace as (step, l1) pairs.
-fn trace_l1(out: &Path, id_prefix: &str) -> Vec<(u64, f64)> {
+/// Rows of a scene's trace as (step, l1) pairs.
+fn trace_l1(out: &Path, scene: &str) -> Vec<(u64, f64)> {
     let mut r = csv::Reader::from_path(out.join("trace.csv")).expect("trace.csv");
     let h = r.headers().expect("header").clone();
     let col = |n: &str| h.iter().position(|x| x == n).expect(n);
-    let (id, step, l1) = (col("id"), col("step"), col("l1"));
+    let (sc, step, l1) = (col("scene"), col("step"), col("l1"));
     r.records()
         .map(|x| x.expect("row"))
-        .filter(|x| x[id].starts_with(id_prefix))
+        .filter(|x| &x[sc] == scene)
         .map(|x| (x[step].parse().expect("step"), x[l1].parse().expect("l1")))
         .collect()
 }
