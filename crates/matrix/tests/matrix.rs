@@ -479,7 +479,11 @@ fn final_gather_keeps_the_near_white_furnace_and_gouraud_matches_constant_there(
         for p in radlab_scene::evaluation_points(&scene, 40, 3) {
             let b = sol.radiosity_at(p.face, p.point);
             let rel = (b - Rgb::splat(exact)).abs().max_element() / exact;
-            assert!(rel < 0.01, "{reconstruction:?} at {}: {b} ({rel:.2e})", p.point);
+            assert!(
+                rel < 0.01,
+                "{reconstruction:?} at {}: {b} ({rel:.2e})",
+                p.point
+            );
         }
         if reconstruction == Reconstruction::FinalGather {
             let (rays, kernels) = s.gather_work();

@@ -54,6 +54,7 @@
 //! | `max_steps` | 100 | steps before `Converged` |
 //! | `method` | `random-walk` | `random-walk` (collision-shooting walks) or `stochastic-jacobi` |
 //! | `max_depth` | 100000 | cap on bounces (walks) or generations (Jacobi) |
+//! | `reconstruction` | `gouraud` | point answers: `constant`, `gouraud` or `final-gather` (radlab_scene::reconstruction) |
 //!
 //! **Cost**: O(particles × 1/(1 − ρ̄)) rays, independent of the number of element pairs (no form factors);
 //! memory O(elements). **Does badly**: small or dimly lit elements receive few particles and stay noisy
@@ -88,11 +89,11 @@ mod stochastic_jacobi;
 pub use camera_render::{RenderParams, render};
 pub use mesh_radiosity::{McMethod, McRadiosityParams, McRadiositySolver};
 pub use path_estimator::DirectSampling;
-pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver};
 pub use point_estimator::{
     DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
     estimate_points, estimate_points_with_progress,
 };
+pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver};
 
 #[doc(no_inline)]
 pub use radlab_scene::{Accel, Camera};

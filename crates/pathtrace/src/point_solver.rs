@@ -28,8 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};
 use crate::point_estimator::{
-    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
-    estimate_points,
+    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint, estimate_points,
 };
 use crate::running_stats::RunningStats;
 

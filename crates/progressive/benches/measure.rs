@@ -21,9 +21,8 @@ use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
 use radlab_progressive::{ProgressiveParams, ProgressiveSolver};
 use radlab_scene::form_factor::VisibilitySampling;
 use radlab_scene::{
-    error_metric,
     Accel, EvalPoint, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size,
-    evaluation_points,
+    error_metric, evaluation_points,
 };
 
 struct Reference {

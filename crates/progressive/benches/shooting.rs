@@ -20,8 +20,8 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use radlab_matrix::{MatrixParams, MatrixSolver};
 use radlab_progressive::{ProgressiveParams, ProgressiveSolver, StopReason};
 use radlab_scene::{
-    error_metric,
-    Accel, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size, evaluation_points,
+    Accel, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size, error_metric,
+    evaluation_points,
 };
 
 fn run<'a>(scene: &'a Scene, accel: &'a Accel, params: ProgressiveParams) -> ProgressiveSolver<'a> {

@@ -14,8 +14,8 @@ use std::sync::OnceLock;
 
 use radlab_scene::gouraud::ElementValue;
 use radlab_scene::{
-    Accel, FaceId, Polygon, Reconstruction, Reconstructor, Rgb, Scene, Solution, SolveError, Solver,
-    Stats, Step,
+    Accel, FaceId, Polygon, Reconstruction, Reconstructor, Rgb, Scene, Solution, SolveError,
+    Solver, Stats, Step,
 };
 
 use crate::adaptive_subdivision::{self, Refinement};
@@ -433,7 +433,8 @@ impl Solution for ProgressiveSolver<'_> {
                         ElementValue {
                             face: el.face as FaceId,
                             polygon: el.polygon,
-                            radiosity: el.radiosity + sol.reflectance[el.face as usize] * sol.ambient,
+                            radiosity: el.radiosity
+                                + sol.reflectance[el.face as usize] * sol.ambient,
                         }
                     })
                     .collect()

@@ -656,7 +656,10 @@ fn final_gather_is_exact_for_direct_light_anywhere_and_gouraud_is_continuous() {
                 assert!((b.x - exact).abs() < 1e-12, "({u}, {v}): {b} vs {exact}");
             } else {
                 // Gouraud: continuous, but only as exact as the linear fit to the element values.
-                assert!((b.x - exact).abs() < 0.1 * exact, "({u}, {v}): {b} vs {exact}");
+                assert!(
+                    (b.x - exact).abs() < 0.1 * exact,
+                    "({u}, {v}): {b} vs {exact}"
+                );
             }
         }
     }

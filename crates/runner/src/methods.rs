@@ -107,7 +107,10 @@ pub fn methods() -> Vec<MethodInfo> {
             params: crate::pathtraced::params,
             build: |scene, accel, table, seed, points| {
                 let params = radlab_pathtrace::PathTraceParams::from_table(table)?;
-                let points = points.iter().map(radlab_pathtrace::SurfacePoint::from).collect();
+                let points = points
+                    .iter()
+                    .map(radlab_pathtrace::SurfacePoint::from)
+                    .collect();
                 Ok(Box::new(radlab_pathtrace::PathTraceSolver::new(
                     scene, accel, params, seed, points,
                 )?))

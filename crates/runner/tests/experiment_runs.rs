@@ -354,7 +354,12 @@ params = { initial_samples = 16, samples = 1024 }
     let out = tmp.path().join("out");
     let o = radlab(
         tmp.path(),
-        &["run", cfg.to_str().expect("utf8"), "--out", out.to_str().expect("utf8")],
+        &[
+            "run",
+            cfg.to_str().expect("utf8"),
+            "--out",
+            out.to_str().expect("utf8"),
+        ],
         &[],
     );
     assert!(o.status.success(), "{}", text(&o));
@@ -410,7 +415,12 @@ params = {{ initial_samples = 64, samples = 64 }}
         let out = tmp.path().join(format!("out{seed}"));
         let o = radlab(
             tmp.path(),
-            &["run", cfg.to_str().expect("utf8"), "--out", out.to_str().expect("utf8")],
+            &[
+                "run",
+                cfg.to_str().expect("utf8"),
+                "--out",
+                out.to_str().expect("utf8"),
+            ],
             &[],
         );
         assert!(o.status.success(), "{}", text(&o));
@@ -422,6 +432,9 @@ params = {{ initial_samples = 64, samples = 64 }}
         .map(|e| e.expect("entry").file_name())
         .collect();
     assert_eq!(refs.len(), 1, "one shared reference: {refs:?}");
-    assert!(l1[0] != l1[1], "seeds 1 and 2 give the same estimates: {l1:?}");
+    assert!(
+        l1[0] != l1[1],
+        "seeds 1 and 2 give the same estimates: {l1:?}"
+    );
     assert!(l1.iter().all(|&e| e > 0.0), "{l1:?}");
 }

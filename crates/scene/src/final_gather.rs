@@ -209,9 +209,7 @@ mod tests {
         for (x, y) in [(0.5, 0.3), (0.1, 0.05), (0.93, 0.41), (0.0, 0.0)] {
             let p = glam::dvec3(x, y, 0.0);
             let f = (0..scene.faces.len())
-                .find(|&f| {
-                    !scene.material(f).is_emitter() && scene.polygon(f).contains(p, 1e-9)
-                })
+                .find(|&f| !scene.material(f).is_emitter() && scene.polygon(f).contains(p, 1e-9))
                 .expect("a receiver face");
             let b = g.radiosity_at(&scene, &accel, f, p);
             let want = rho * e * f_exact(x, y);

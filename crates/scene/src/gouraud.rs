@@ -90,7 +90,10 @@ impl GouraudField {
             // point_at's triangle map is a + s(b − a) + t(c − a) on the fold s + t ≤ 1.
             (1.0 - s - t) * c[0] + s * c[1] + t * c[2]
         } else {
-            (1.0 - s) * (1.0 - t) * c[0] + s * (1.0 - t) * c[1] + s * t * c[2] + (1.0 - s) * t * c[3]
+            (1.0 - s) * (1.0 - t) * c[0]
+                + s * (1.0 - t) * c[1]
+                + s * t * c[2]
+                + (1.0 - s) * t * c[3]
         }
     }
 
@@ -139,8 +142,16 @@ fn parameters(poly: &Polygon, p: DVec3) -> (f64, f64) {
         tt += ds.perp_dot(r) / det;
     }
     (
-        if s.is_finite() { s.clamp(0.0, 1.0) } else { 0.5 },
-        if tt.is_finite() { tt.clamp(0.0, 1.0) } else { 0.5 },
+        if s.is_finite() {
+            s.clamp(0.0, 1.0)
+        } else {
+            0.5
+        },
+        if tt.is_finite() {
+            tt.clamp(0.0, 1.0)
+        } else {
+            0.5
+        },
     )
 }
 
@@ -207,9 +218,9 @@ fn fill_face(elements: &[ElementValue], ids: &[usize], corners: &mut [[Rgb; 4]])
             fit(&ring, &centroid, &area, &value, at, size)
         });
         let b = fitted.unwrap_or_else(|| {
-            let (s, a) = inc
-                .iter()
-                .fold((Rgb::ZERO, 0.0), |(s, a), &k| (s + area[k] * value[k], a + area[k]));
+            let (s, a) = inc.iter().fold((Rgb::ZERO, 0.0), |(s, a), &k| {
+                (s + area[k] * value[k], a + area[k])
+            });
             if a > 0.0 { s / a } else { Rgb::ZERO }
         });
         vertex_value.push(b.max(Rgb::ZERO));

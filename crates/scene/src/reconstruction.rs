@@ -86,10 +86,9 @@ impl Reconstructor {
     /// Rays and kernel evaluations the final gather has spent answering queries so far (zeros otherwise).
     pub fn gather_work(&self) -> (u64, u64) {
         match self.built.get() {
-            Some(Built::Gather(g)) => (
-                self.past.0 + g.rays(),
-                self.past.1 + g.kernel_evaluations(),
-            ),
+            Some(Built::Gather(g)) => {
+                (self.past.0 + g.rays(), self.past.1 + g.kernel_evaluations())
+            }
             _ => self.past,
         }
     }

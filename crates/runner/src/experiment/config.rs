@@ -165,6 +165,9 @@ pub struct OutputsConfig {
     pub image_height: u32,
     /// Samples per pixel when rendering a method's solution.
     pub image_spp: u32,
+    /// Most paths per pixel of a `pathtrace` run's image: it is rendered at the paths per point the run
+    /// reached, capped here (default 64) because a camera image costs pixels × paths.
+    pub pathtrace_image_spp: u32,
 }
 
 impl Default for OutputsConfig {
@@ -175,6 +178,7 @@ impl Default for OutputsConfig {
             image_width: 0,
             image_height: 0,
             image_spp: 4,
+            pathtrace_image_spp: 64,
         }
     }
 }

@@ -354,14 +354,15 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     {
         let t0 = Instant::now();
         let image = if spec.method == crate::pathtraced::NAME {
-            // Path tracing's image costs paths per pixel: render it at the paths per point the run reached.
+            // Path tracing's image costs paths per pixel: render it at the paths per point the run reached
+            // (capped by outputs.pathtrace_image_spp).
             let params = radlab_pathtrace::PathTraceParams::from_table(spec.params.clone())?;
             let reached = (0..rec.step.saturating_sub(1))
                 .fold(params.initial_samples.min(params.samples), |n, _| {
                     (2 * n).min(params.samples)
                 });
             let render = radlab_pathtrace::RenderParams {
-                samples_per_pixel: reached.max(1),
+                samples_per_pixel: reached.min(job.outputs.pathtrace_image_spp).max(1),
                 max_depth: params.max_depth,
                 direct: params.direct,
             };

@@ -153,7 +153,11 @@ where
     // The legend gets its own column on the right, so it never covers data.
     let labelled: Vec<&Series> = plot.series.iter().filter(|s| s.label.is_some()).collect();
     let (w, _) = root.dim_in_pixel();
-    let legend_w = if labelled.is_empty() { 0 } else { 210.min(w / 3) };
+    let legend_w = if labelled.is_empty() {
+        0
+    } else {
+        210.min(w / 3)
+    };
     let (plot_area, legend_area) = root.split_horizontally(w - legend_w);
     let y_mantissas: &[f64] = if plot.y_is_error {
         &[1.0, 3.0]

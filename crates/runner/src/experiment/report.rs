@@ -196,13 +196,12 @@ pub fn markdown(
         let pt: Vec<&str> = labels
             .iter()
             .copied()
-            .filter(|l| rs.iter().any(|r| r.label == *l && r.method == crate::pathtraced::NAME))
+            .filter(|l| {
+                rs.iter()
+                    .any(|r| r.label == *l && r.method == crate::pathtraced::NAME)
+            })
             .collect();
-        let fe: Vec<&str> = labels
-            .iter()
-            .copied()
-            .filter(|l| !pt.contains(l))
-            .collect();
+        let fe: Vec<&str> = labels.iter().copied().filter(|l| !pt.contains(l)).collect();
         let cross = crossings(trace, scene, &pt, &fe, n as f64);
         if !cross.is_empty() {
             let _ = writeln!(
@@ -225,9 +224,10 @@ pub fn markdown(
                     c.best,
                     fmt_time(Some(c.solve)),
                     fmt_time(Some(c.answer_per_point)),
-                    c.points.map_or("none (path tracing cheaper at any count)".into(), |p| {
-                        format!("{p:.0}")
-                    })
+                    c.points
+                        .map_or("none (path tracing cheaper at any count)".into(), |p| {
+                            format!("{p:.0}")
+                        })
                 );
             }
         }
@@ -357,7 +357,10 @@ mod tests {
         assert_eq!(c.len(), 2, "{c:?}");
         assert_eq!(c[0].best, "matrix");
         assert!((c[0].points.expect("10%") - 225.0).abs() < 1e-9, "{c:?}");
-        assert!((c[1].points.expect("3%") - 1.9 / (0.04 - 0.001)).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c[1].points.expect("3%") - 1.9 / (0.04 - 0.001)).abs() < 1e-9,
+            "{c:?}"
+        );
         // Path tracing no costlier per point than answering: no crossover.
         assert_eq!(crossover(0.001, 5.0, 0.002), None);
         assert_eq!(crossover(0.01, 0.0, 0.0), Some(0.0));
