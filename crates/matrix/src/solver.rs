@@ -5,7 +5,7 @@
 use glam::DVec3;
 use radlab_scene::{
     Accel, ElementMesh, FaceId, MethodParams, Reconstructor, Rgb, Scene, Solution, SolveError,
-    Solver, Stats, Step, default_element_size, gouraud::ElementValue,
+    Solver, Stats, Step, default_element_size,
 };
 
 use crate::assembly::{self, Assembly, PairSettings};
@@ -148,20 +148,6 @@ impl<'a> MatrixSolver<'a> {
             output: Reconstructor::new(params.reconstruction, seed),
             params,
         })
-    }
-
-    /// Every element with its current radiosity, in mesh order (what the reconstructions work from).
-    pub fn element_values(&self) -> Vec<ElementValue> {
-        self.mesh
-            .elements
-            .iter()
-            .zip(&self.radiosity)
-            .map(|(e, &b)| ElementValue {
-                face: e.face as usize,
-                polygon: e.polygon,
-                radiosity: b,
-            })
-            .collect()
     }
 
     /// Rays and point-to-polygon kernel evaluations spent answering queries by final gather so far (zeros
@@ -374,7 +360,7 @@ impl Solution for MatrixSolver<'_> {
             point,
             || self.radiosity[self.mesh.locate(face, point)],
             || Some(self.mesh.locate(face, point)),
-            || self.element_values(),
+            || self.mesh.values(&self.radiosity),
         )
     }
 }

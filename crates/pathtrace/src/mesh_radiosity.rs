@@ -24,7 +24,6 @@ use glam::DVec3;
 use radlab_scene::{
     Accel, ElementMesh, FaceId, MethodParams, Reconstruction, Reconstructor, Rgb, Scene, Solution,
     SolveError, Solver, Stats, Step, default_element_size,
-    gouraud::ElementValue,
     sampling::{self, Rng},
 };
 use serde::{Deserialize, Serialize};
@@ -221,18 +220,7 @@ impl Solution for MeshSolution<'_> {
             point,
             || self.radiosity[element()],
             || Some(element()),
-            || {
-                self.mesh
-                    .elements
-                    .iter()
-                    .zip(&self.radiosity)
-                    .map(|(e, &b)| ElementValue {
-                        face: e.face as FaceId,
-                        polygon: e.polygon,
-                        radiosity: b,
-                    })
-                    .collect()
-            },
+            || self.mesh.values(&self.radiosity),
         )
     }
 }

@@ -21,14 +21,14 @@ use std::collections::HashMap;
 use glam::DVec3;
 use radlab_scene::{
     Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
-    sampling::{self, mix64},
+    sampling::mix64,
 };
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};
 use crate::point_estimator::{
-    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint, estimate_points,
+    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
+    estimate_points, sample_points,
 };
 use crate::running_stats::RunningStats;
 
@@ -238,28 +238,17 @@ impl Solver for PathTraceSolver<'_> {
             self.params.max_depth,
             self.params.direct,
         );
-        let (seed, first_chunk, points) = (self.seed, self.chunks, &self.points);
         let rays0 = self.accel.rays_cast();
-        let parts: Vec<RunningStats> = (0..points.len() * chunks)
-            .into_par_iter()
-            .map(|item| {
-                let (i, c) = (item / chunks, item % chunks);
-                let p = &points[i];
-                let first = c as u32 * SAMPLES_PER_CHUNK;
-                let count = SAMPLES_PER_CHUNK.min(batch - first);
-                let stream = ((i as u64) << 32) | (first_chunk + c as u64);
-                let mut rng = sampling::rng(seed, stream);
-                let mut s = RunningStats::default();
-                for _ in 0..count {
-                    s.push(estimator.radiosity(p.face, p.point, p.normal, &mut rng));
-                }
-                s
-            })
-            .collect();
-        for (i, point_parts) in parts.chunks(chunks).enumerate() {
-            for part in point_parts {
-                self.stats[i].merge(part);
-            }
+        let batch_stats = sample_points(
+            &estimator,
+            &self.points,
+            batch,
+            self.chunks,
+            self.seed,
+            &|_| {},
+        );
+        for (s, b) in self.stats.iter_mut().zip(&batch_stats) {
+            s.merge(b);
         }
         self.rays += self.accel.rays_cast() - rays0;
         self.chunks += chunks as u64;

@@ -426,16 +426,12 @@ impl Solution for ProgressiveSolver<'_> {
                     .map(|k| k as usize)
             },
             || {
-                mesh.leaves
-                    .iter()
-                    .map(|&e| {
-                        let el = &mesh.elements[e as usize];
-                        ElementValue {
-                            face: el.face as FaceId,
-                            polygon: el.polygon,
-                            radiosity: el.radiosity
-                                + sol.reflectance[el.face as usize] * sol.ambient,
-                        }
+                self.elements()
+                    .into_iter()
+                    .map(|e| ElementValue {
+                        face: e.face,
+                        polygon: e.polygon,
+                        radiosity: e.radiosity + sol.reflectance[e.face] * sol.ambient,
                     })
                     .collect()
             },

@@ -60,13 +60,10 @@ fn csv_rows(p: &Path) -> Vec<csv::StringRecord> {
     r.records().map(|x| x.expect("row")).collect()
 }
 
-#[test]
-fn tiny_experiment_end_to_end_then_skips() {
-    let tmp = tempfile::tempdir().expect("tmp");
-    let cfg = write_config(tmp.path(), "tiny.toml", TINY);
-    let out = tmp.path().join("out");
+/// `radlab run CFG --out OUT` in `dir`, which must succeed.
+fn run_ok(dir: &Path, cfg: &Path, out: &Path) {
     let o = radlab(
-        tmp.path(),
+        dir,
         &[
             "run",
             cfg.to_str().expect("utf8"),
@@ -76,6 +73,14 @@ fn tiny_experiment_end_to_end_then_skips() {
         &[],
     );
     assert!(o.status.success(), "{}", text(&o));
+}
+
+#[test]
+fn tiny_experiment_end_to_end_then_skips() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let cfg = write_config(tmp.path(), "tiny.toml", TINY);
+    let out = tmp.path().join("out");
+    run_ok(tmp.path(), &cfg, &out);
     let runs = csv_rows(&out.join("runs.csv"));
     assert_eq!(runs.len(), 4, "2 scenes x 2 sweep points");
     let trace = csv_rows(&out.join("trace.csv"));
@@ -113,17 +118,7 @@ fn tiny_experiment_end_to_end_then_skips() {
         assert!(r.floor_l1 > 0.0 && r.l1.is_finite(), "{r:?}");
     }
     // Run again: everything is skipped.
-    let o = radlab(
-        tmp.path(),
-        &[
-            "run",
-            cfg.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", text(&o));
+    run_ok(tmp.path(), &cfg, &out);
     assert!(
         text(&o).contains("0 runs executed, 4 skipped"),
         "{}",
@@ -352,17 +347,7 @@ params = { initial_samples = 16, samples = 1024 }
 "#,
     );
     let out = tmp.path().join("out");
-    let o = radlab(
-        tmp.path(),
-        &[
-            "run",
-            cfg.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", text(&o));
+    run_ok(tmp.path(), &cfg, &out);
     let trace = trace_l1(&out, "furnace");
     assert_eq!(trace.len(), 7, "{trace:?}");
     let pts: Vec<(f64, f64)> = trace
@@ -413,17 +398,7 @@ params = {{ initial_samples = 64, samples = 64 }}
     for seed in [1u64, 2, 12345] {
         let cfg = write_config(tmp.path(), &format!("s{seed}.toml"), &body(seed));
         let out = tmp.path().join(format!("out{seed}"));
-        let o = radlab(
-            tmp.path(),
-            &[
-                "run",
-                cfg.to_str().expect("utf8"),
-                "--out",
-                out.to_str().expect("utf8"),
-            ],
-            &[],
-        );
-        assert!(o.status.success(), "{}", text(&o));
+        run_ok(tmp.path(), &cfg, &out);
         let t = trace_l1(&out, "cornell");
         l1.push(t.last().expect("a trace row").1);
     }

@@ -193,15 +193,12 @@ mod tests {
         .expect("plates");
         let accel = Accel::new(&scene);
         let mesh = ElementMesh::new(&scene, 0.1);
-        let els: Vec<ElementValue> = mesh
+        let emission: Vec<Rgb> = mesh
             .elements
             .iter()
-            .map(|el| ElementValue {
-                face: el.face as usize,
-                polygon: el.polygon,
-                radiosity: scene.emission(el.face as usize),
-            })
+            .map(|el| scene.emission(el.face as usize))
             .collect();
+        let els = mesh.values(&emission);
         let g = FinalGather::new(&scene, &els, GatherSettings::with_seed(7));
         let f_exact = |x: f64, y: f64| {
             corner(x, y, h) + corner(w - x, y, h) + corner(x, d - y, h) + corner(w - x, d - y, h)
@@ -225,15 +222,7 @@ mod tests {
         let scene = builtin("furnace-cube?tessellation=2&reflectance=0.5").expect("furnace");
         let accel = Accel::new(&scene);
         let mesh = ElementMesh::new(&scene, 1e9);
-        let els: Vec<ElementValue> = mesh
-            .elements
-            .iter()
-            .map(|e| ElementValue {
-                face: e.face as usize,
-                polygon: e.polygon,
-                radiosity: Rgb::ONE,
-            })
-            .collect();
+        let els = mesh.values(&vec![Rgb::ONE; mesh.len()]);
         let g = FinalGather::new(&scene, &els, GatherSettings::with_seed(1));
         let p = scene.polygon(0).centroid();
         let b = g.radiosity_at(&scene, &accel, 0, p);
