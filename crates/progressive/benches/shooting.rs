@@ -20,7 +20,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use radlab_matrix::{MatrixParams, MatrixSolver};
 use radlab_progressive::{ProgressiveParams, ProgressiveSolver, StopReason};
 use radlab_scene::{
-    Accel, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size, error_metric,
+    Accel, Scene, Solution, Solver, Step, builtin, default_element_size, error_metric,
     evaluation_points,
 };
 

@@ -60,8 +60,8 @@ fn csv_rows(p: &Path) -> Vec<csv::StringRecord> {
     r.records().map(|x| x.expect("row")).collect()
 }
 
-/// `radlab run CFG --out OUT` in `dir`, which must succeed.
-fn run_ok(dir: &Path, cfg: &Path, out: &Path) {
+/// `radlab run CFG --out OUT` in `dir`, which must succeed; its output.
+fn run_ok(dir: &Path, cfg: &Path, out: &Path) -> Output {
     let o = radlab(
         dir,
         &[
@@ -73,6 +73,7 @@ fn run_ok(dir: &Path, cfg: &Path, out: &Path) {
         &[],
     );
     assert!(o.status.success(), "{}", text(&o));
+    o
 }
 
 #[test]
@@ -118,7 +119,7 @@ fn tiny_experiment_end_to_end_then_skips() {
         assert!(r.floor_l1 > 0.0 && r.l1.is_finite(), "{r:?}");
     }
     // Run again: everything is skipped.
-    run_ok(tmp.path(), &cfg, &out);
+    let o = run_ok(tmp.path(), &cfg, &out);
     assert!(
         text(&o).contains("0 runs executed, 4 skipped"),
         "{}",

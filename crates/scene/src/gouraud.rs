@@ -399,8 +399,8 @@ mod tests {
     fn one_element_face_is_constant() {
         let els = grid(1, |_| Rgb::new(0.5, 1.0, 2.0));
         let g = GouraudField::new(&els);
-        for e in 0..els.len() {
-            assert_eq!(g.at(e, els[e].polygon.centroid()), Rgb::new(0.5, 1.0, 2.0));
+        for (e, el) in els.iter().enumerate() {
+            assert_eq!(g.at(e, el.polygon.centroid()), Rgb::new(0.5, 1.0, 2.0));
         }
     }
 }
