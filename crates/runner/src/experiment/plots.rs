@@ -35,7 +35,7 @@ pub fn ensure_font() {
 
 /// Colour of the k-th method.
 pub fn colour(k: usize) -> RGBColor {
-    const C: [RGBColor; 8] = [
+    const C: [RGBColor; 12] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -44,6 +44,10 @@ pub fn colour(k: usize) -> RGBColor {
         RGBColor(140, 86, 75),
         RGBColor(227, 119, 194),
         RGBColor(23, 190, 207),
+        RGBColor(188, 189, 34),
+        RGBColor(0, 0, 0),
+        RGBColor(127, 127, 127),
+        RGBColor(255, 187, 120),
     ];
     C[k % C.len()]
 }
