@@ -113,7 +113,9 @@ impl MethodParams for MatrixParams {
                 "reconstruction",
                 "point answers from the element values: constant | gouraud (vertex-interpolated) | \
                  final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
-                 answering cost); default final-gather",
+                 answering cost); default final-gather (Cornell box, 512 points: relative L1 3.0% against 12.3% constant and \
+                 12.8% gouraud at 110 mm elements, 1.4% / 6.4% / 5.6% at 55 mm; a gather costs rays per query, so \
+                 images of large meshes are slow)",
             ),
         ]
     }
