@@ -21,8 +21,15 @@
 //! - **Steps**: assembly takes the first steps (blocks of whole rows holding at least max(65,536, 16 n)
 //!   element pairs each; 7 steps for ~940 elements), then one step per iteration; [`Solver::step`](radlab_scene::Solver::step) returns `Converged` once the rule is met or
 //!   `max_iterations` is reached ([`MatrixSolver::hit_iteration_cap`] tells which).
-//! - **Solution queries**: piecewise constant; `radiosity_at(face, point)` is B of the element containing the
-//!   point.
+//! - **Solution queries** (`reconstruction`, radlab_scene::reconstruction): `constant` answers B of the element
+//!   containing the point; `gouraud` interpolates vertex values (least-squares fits to the surrounding
+//!   elements) over each face's elements; `final-gather` recomputes B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j
+//!   from every element with the exact point-to-polygon factor and visibility rays (survey 2.5.3). The gather's
+//!   rays and kernel evaluations are counted by [`MatrixSolver::gather_work`], not in `stats()`, which counts
+//!   solving: answering is charged by whoever asks, once per set of queries (the runner times each evaluation
+//!   pass and adds it to the run's time and rays). A gather costs one kernel evaluation and one to sixteen rays
+//!   per element per query point, so it suits answers at hundreds or thousands of points, not every pixel of a
+//!   large image.
 //!
 //! ## Parameters ([`MatrixParams`])
 //! | name | default | meaning |
@@ -34,6 +41,7 @@
 //! | `visibility` | `jittered4x4` | rays per element pair: `unoccluded`, `centre`, `jittered2x2`, `jittered4x4`, `jittered8x8` |
 //! | `quadrature` | 2 | receiver points per axis (1..=16) |
 //! | `memory_budget_mib` | 2048 | refuse problems whose matrix and vectors exceed this |
+//! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` |
 //!
 //! ## Cost
 //! n elements: **O(n²) memory** (8 n² bytes: about 8 MB at n = 1,000, 800 MB at n = 10,000) and **O(n²)
@@ -71,8 +79,8 @@ mod solver;
 
 pub use assembly::{PAIRS_PER_STEP, predicted_element_count, required_bytes};
 pub use params::{
-    DEFAULT_MAX_ITERATIONS, DEFAULT_MEMORY_BUDGET_MIB, DEFAULT_QUADRATURE, DEFAULT_TOLERANCE,
-    Iteration, MAX_QUADRATURE, MatrixParams,
+    DEFAULT_MAX_ITERATIONS, DEFAULT_MEMORY_BUDGET_MIB, DEFAULT_QUADRATURE, DEFAULT_RECONSTRUCTION,
+    DEFAULT_TOLERANCE, Iteration, MAX_QUADRATURE, MatrixParams,
 };
 pub use radlab_scene::form_factor::VisibilitySampling;
 pub use solver::MatrixSolver;

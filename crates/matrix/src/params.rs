@@ -2,7 +2,7 @@
 //! pairs (`--set iteration=conjugate-gradient`) or a TOML table through [`MethodParams`]; every error names
 //! the parameter.
 
-use radlab_scene::{MethodParams, SolveError, form_factor::VisibilitySampling};
+use radlab_scene::{MethodParams, Reconstruction, SolveError, form_factor::VisibilitySampling};
 use serde::{Deserialize, Serialize};
 
 /// How the linear system (I − ρF) B = E is solved.
@@ -58,7 +58,13 @@ pub struct MatrixParams {
     /// Memory the matrix and solver vectors may take, MiB; larger problems are refused before allocating.
     /// Default 2048.
     pub memory_budget_mib: f64,
+    /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
+    /// `final-gather` (see [`radlab_scene::reconstruction`]). Default [`DEFAULT_RECONSTRUCTION`].
+    pub reconstruction: Reconstruction,
 }
+
+/// Default reconstruction of point answers, chosen by measurement (see the crate documentation).
+pub const DEFAULT_RECONSTRUCTION: Reconstruction = Reconstruction::FinalGather;
 
 impl Default for MatrixParams {
     fn default() -> Self {
@@ -70,6 +76,7 @@ impl Default for MatrixParams {
             visibility: VisibilitySampling::Jittered4x4,
             quadrature: DEFAULT_QUADRATURE,
             memory_budget_mib: DEFAULT_MEMORY_BUDGET_MIB,
+            reconstruction: DEFAULT_RECONSTRUCTION,
         }
     }
 }
@@ -101,6 +108,14 @@ impl MethodParams for MatrixParams {
             (
                 "memory_budget_mib",
                 "MiB the n×n matrix and vectors may take; larger problems are refused; default 2048",
+            ),
+            (
+                "reconstruction",
+                "point answers from the element values: constant | gouraud (vertex-interpolated) | \
+                 final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
+                 answering cost); default final-gather (Cornell box, 512 points: relative L1 3.0% against 12.3% constant and \
+                 12.8% gouraud at 110 mm elements, 1.4% / 6.4% / 5.6% at 55 mm; a gather costs rays per query, so \
+                 images of large meshes are slow)",
             ),
         ]
     }
@@ -189,6 +204,7 @@ mod tests {
             ("memory_budget_mib", "0"),
             ("iteration", "sor"),
             ("visibility", "lots"),
+            ("reconstruction", "smooth"),
         ] {
             let e = MatrixParams::from_pairs(&pairs(&[(k, v)]))
                 .expect_err("invalid")
@@ -208,6 +224,6 @@ mod tests {
             assert!(d.iter().any(|(k, _)| k == name), "{name} missing: {d:?}");
         }
         let docs = MatrixParams::docs();
-        assert_eq!(docs.len(), 7);
+        assert_eq!(docs.len(), 8);
     }
 }

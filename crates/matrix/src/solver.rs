@@ -4,8 +4,8 @@
 
 use glam::DVec3;
 use radlab_scene::{
-    Accel, ElementMesh, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats,
-    Step, default_element_size,
+    Accel, ElementMesh, FaceId, MethodParams, Reconstructor, Rgb, Scene, Solution, SolveError,
+    Solver, Stats, Step, default_element_size,
 };
 
 use crate::assembly::{self, Assembly, PairSettings};
@@ -42,6 +42,7 @@ pub struct MatrixSolver<'a> {
     iterations: usize,
     residual: Option<f64>,
     hit_cap: bool,
+    output: Reconstructor,
 }
 
 impl<'a> MatrixSolver<'a> {
@@ -144,8 +145,16 @@ impl<'a> MatrixSolver<'a> {
             iterations: 0,
             residual: None,
             hit_cap: false,
+            output: Reconstructor::new(params.reconstruction, seed),
             params,
         })
+    }
+
+    /// Rays and point-to-polygon kernel evaluations spent answering queries by final gather so far (zeros
+    /// for the other reconstructions). Not part of [`Solver::stats`], which counts solving only: the runner
+    /// charges answering separately, once per evaluation (see the crate documentation).
+    pub fn gather_work(&self) -> (u64, u64) {
+        self.output.gather_work()
     }
 
     /// The element mesh the solution lives on.
@@ -189,6 +198,7 @@ impl<'a> MatrixSolver<'a> {
     pub fn restart(&mut self, iteration: Iteration) {
         self.params.iteration = iteration;
         self.radiosity.clone_from(&self.emission);
+        self.output.invalidate();
         self.cg = None;
         self.iterations = 0;
         self.residual = None;
@@ -299,6 +309,7 @@ impl Solver for MatrixSolver<'_> {
             }
             Phase::Solving => {
                 self.steps += 1;
+                self.output.invalidate();
                 self.iterate()
             }
             Phase::Done => Ok(Step::Converged),
@@ -335,13 +346,22 @@ impl Solver for MatrixSolver<'_> {
 }
 
 impl Solution for MatrixSolver<'_> {
-    /// The radiosity of the element of `face` containing `point` (piecewise constant). NaN for a face id
-    /// outside the scene.
+    /// The radiosity at `point` on `face` as the `reconstruction` parameter answers it: the containing
+    /// element's value, Gouraud-interpolated vertex values, or a final gather from every element. NaN for a
+    /// face id outside the scene.
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         if face >= self.scene.faces.len() {
             return Rgb::splat(f64::NAN);
         }
-        self.radiosity[self.mesh.locate(face, point)]
+        self.output.radiosity_at(
+            self.scene,
+            self.accel,
+            face,
+            point,
+            || self.radiosity[self.mesh.locate(face, point)],
+            || Some(self.mesh.locate(face, point)),
+            || self.mesh.values(&self.radiosity),
+        )
     }
 }
 

@@ -5,7 +5,9 @@
 mod common;
 
 use radlab_matrix::{Iteration, MatrixParams, MatrixSolver, VisibilitySampling};
-use radlab_scene::{Accel, Rgb, Scene, SolveError, Solver, Step, builtin, form_factor};
+use radlab_scene::{
+    Accel, Reconstruction, Rgb, Scene, SolveError, Solver, Step, builtin, form_factor,
+};
 
 const METHODS: [Iteration; 3] = [
     Iteration::Jacobi,
@@ -413,6 +415,7 @@ fn solution_is_the_element_value_and_steps_report_progress() {
         &accel,
         MatrixParams {
             element_size: Some(0.25),
+            reconstruction: Reconstruction::Constant,
             ..MatrixParams::default()
         },
         1,
@@ -450,4 +453,41 @@ fn iteration_cap_stops_cleanly() {
     );
     assert!(s.hit_iteration_cap());
     assert_eq!(s.iterations(), 3);
+}
+
+#[test]
+fn final_gather_keeps_the_near_white_furnace_and_gouraud_matches_constant_there() {
+    // ρ = 0.999: B = E/(1 − ρ) = 1000 E everywhere. The gather B(x) = E + ρ Σ_j F_xj B_j sums exact
+    // point-to-polygon factors over a closed cube (Σ_j F_xj = 1), so it inherits the solution's accuracy
+    // (tolerance 1e-4 relative) instead of adding a discretisation error: well within 1%.
+    let scene = builtin("furnace-cube?reflectance=0.999&tessellation=2").expect("scene");
+    let accel = Accel::new(&scene);
+    let exact = 1.0 / (1.0 - 0.999);
+    for reconstruction in [Reconstruction::FinalGather, Reconstruction::Gouraud] {
+        let s = solve(
+            &scene,
+            &accel,
+            MatrixParams {
+                element_size: Some(0.5),
+                iteration: Iteration::ConjugateGradient,
+                visibility: VisibilitySampling::Unoccluded,
+                reconstruction,
+                ..MatrixParams::default()
+            },
+        );
+        let sol = s.solution();
+        for p in radlab_scene::evaluation_points(&scene, 40, 3) {
+            let b = sol.radiosity_at(p.face, p.point);
+            let rel = (b - Rgb::splat(exact)).abs().max_element() / exact;
+            assert!(
+                rel < 0.01,
+                "{reconstruction:?} at {}: {b} ({rel:.2e})",
+                p.point
+            );
+        }
+        if reconstruction == Reconstruction::FinalGather {
+            let (rays, kernels) = s.gather_work();
+            assert!(rays > 0 && kernels > 0, "gather work is counted");
+        }
+    }
 }

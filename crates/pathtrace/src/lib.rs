@@ -24,6 +24,14 @@
 //! the noise is that of plain path tracing; near-white enclosures make paths long; the standard error of a
 //! heavy-tailed estimate (small bright emitters seen by a few paths) is itself uncertain at low sample counts.
 //!
+//! ### Path tracing as a method ([`PathTraceSolver`])
+//!
+//! The same estimator stepped at a given set of query points (the experiment's evaluation points, or `probe`'s):
+//! each step adds paths to every point, `initial_samples` (default 16) then doubling up to `samples` (default
+//! 1024), so its error against time can be traced beside the finite-element methods'. Its cost is per point:
+//! time and rays grow linearly with the number of points answered. Its streams are keyed by its own seed mixed
+//! with [`METHOD_STREAM_TAG`], never the reference's.
+//!
 //! ## 2. Camera path tracing ([`render`])
 //!
 //! The same estimator through the pixels of a pinhole [`Camera`]: radiance B/π of the surface each jittered
@@ -46,6 +54,7 @@
 //! | `max_steps` | 100 | steps before `Converged` |
 //! | `method` | `random-walk` | `random-walk` (collision-shooting walks) or `stochastic-jacobi` |
 //! | `max_depth` | 100000 | cap on bounces (walks) or generations (Jacobi) |
+//! | `reconstruction` | `gouraud` | point answers: `constant`, `gouraud` or `final-gather` (radlab_scene::reconstruction) |
 //!
 //! **Cost**: O(particles × 1/(1 − ρ̄)) rays, independent of the number of element pairs (no form factors);
 //! memory O(elements). **Does badly**: small or dimly lit elements receive few particles and stay noisy
@@ -72,6 +81,7 @@ mod emitter_sampling;
 mod mesh_radiosity;
 mod path_estimator;
 mod point_estimator;
+mod point_solver;
 mod random_walk;
 mod running_stats;
 mod stochastic_jacobi;
@@ -83,6 +93,7 @@ pub use point_estimator::{
     DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
     estimate_points, estimate_points_with_progress,
 };
+pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver};
 
 #[doc(no_inline)]
 pub use radlab_scene::{Accel, Camera};

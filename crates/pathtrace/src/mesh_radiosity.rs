@@ -22,8 +22,8 @@
 
 use glam::DVec3;
 use radlab_scene::{
-    Accel, ElementMesh, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats,
-    Step, default_element_size,
+    Accel, ElementMesh, FaceId, MethodParams, Reconstruction, Reconstructor, Rgb, Scene, Solution,
+    SolveError, Solver, Stats, Step, default_element_size,
     sampling::{self, Rng},
 };
 use serde::{Deserialize, Serialize};
@@ -67,6 +67,9 @@ pub struct McRadiosityParams {
     /// Cap on bounces per particle (random walk) or generations per step (stochastic Jacobi); default 100,000.
     /// Russian roulette ends walks without bias; the cap only guards against runaway walks.
     pub max_depth: u32,
+    /// How radiosity at a point is answered from the element values (default `gouraud`, chosen by
+    /// measurement: a final gather would also average out the elements' noise, but costs a gather per query).
+    pub reconstruction: Reconstruction,
 }
 
 impl Default for McRadiosityParams {
@@ -77,6 +80,7 @@ impl Default for McRadiosityParams {
             max_steps: 100,
             method: McMethod::RandomWalk,
             max_depth: DEFAULT_MAX_DEPTH,
+            reconstruction: Reconstruction::Gouraud,
         }
     }
 }
@@ -103,6 +107,12 @@ impl MethodParams for McRadiosityParams {
             (
                 "max_depth",
                 "cap on bounces per particle or generations per step (default 100000)",
+            ),
+            (
+                "reconstruction",
+                "point answers from the element values: constant | gouraud | final-gather; default gouraud (Cornell box, \
+                 512 points: relative L1 5.4% against 6.4% constant at 55 mm elements, 3.4% / 4.8% at 35 mm; a final \
+                 gather would cost rays at every query)",
             ),
         ]
     }
@@ -192,14 +202,28 @@ pub(crate) fn derive_seed(seed: u64, a: u64, b: u64) -> u64 {
 /// Piecewise-constant radiosity over the element mesh.
 struct MeshSolution<'a> {
     scene: &'a Scene,
+    accel: &'a Accel,
     mesh: ElementMesh,
     locator: ElementLocator,
     radiosity: Vec<Rgb>,
+    output: Reconstructor,
 }
 
 impl Solution for MeshSolution<'_> {
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        self.radiosity[self.locator.locate(self.scene, &self.mesh, face, point)]
+        if face >= self.scene.faces.len() {
+            return Rgb::splat(f64::NAN);
+        }
+        let element = || self.locator.locate(self.scene, &self.mesh, face, point);
+        self.output.radiosity_at(
+            self.scene,
+            self.accel,
+            face,
+            point,
+            || self.radiosity[element()],
+            || Some(element()),
+            || self.mesh.values(&self.radiosity),
+        )
     }
 }
 
@@ -250,6 +274,7 @@ impl<'a> McRadiositySolver<'a> {
             .iter()
             .map(|el| scene.emission(el.face as FaceId))
             .collect();
+        let reconstruction = params.reconstruction;
         let n = mesh.len();
         Ok(Self {
             accel,
@@ -257,6 +282,8 @@ impl<'a> McRadiositySolver<'a> {
             seed,
             solution: MeshSolution {
                 scene,
+                accel,
+                output: Reconstructor::new(reconstruction, seed),
                 mesh,
                 locator,
                 radiosity,
@@ -342,6 +369,7 @@ impl Solver for McRadiositySolver<'_> {
         };
         self.rays += rays;
         self.steps += 1;
+        self.solution.output.invalidate();
         let k = self.steps as f64;
         let mesh = &self.solution.mesh;
         for (e, phi) in incident.iter().enumerate() {

@@ -134,15 +134,36 @@ pub fn estimate_points_with_progress(
     seed: u64,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Vec<PointEstimate> {
-    let samples = params.samples;
-    let chunks = samples.div_ceil(SAMPLES_PER_CHUNK).max(1) as usize;
+    let chunks = params.samples.div_ceil(SAMPLES_PER_CHUNK).max(1);
     let estimator = PathEstimator::new(scene, accel, params.max_depth, params.direct);
-    let remaining: Vec<AtomicU32> = points
-        .iter()
-        .map(|_| AtomicU32::new(chunks as u32))
-        .collect();
+    let remaining: Vec<AtomicU32> = points.iter().map(|_| AtomicU32::new(chunks)).collect();
     let done = AtomicUsize::new(0);
     let total = points.len();
+    sample_points(&estimator, points, params.samples, 0, seed, &|i| {
+        if remaining[i].fetch_sub(1, Ordering::AcqRel) == 1 {
+            progress(done.fetch_add(1, Ordering::AcqRel) + 1, total);
+        }
+    })
+    .iter()
+    .map(|s| PointEstimate {
+        mean: s.mean(),
+        std_error: s.std_error(),
+    })
+    .collect()
+}
+
+/// `samples` paths at every point, in chunks of [`SAMPLES_PER_CHUNK`]: chunk c of point i draws from stream
+/// (i, `first_chunk` + c) of `seed`, and a point's chunks are merged in order, so the result is the same for
+/// any number of threads. `chunk_done(i)` is called (from worker threads) as each chunk of point i finishes.
+pub(crate) fn sample_points(
+    estimator: &PathEstimator,
+    points: &[SurfacePoint],
+    samples: u32,
+    first_chunk: u64,
+    seed: u64,
+    chunk_done: &(dyn Fn(usize) + Sync),
+) -> Vec<RunningStats> {
+    let chunks = samples.div_ceil(SAMPLES_PER_CHUNK).max(1) as usize;
     let parts: Vec<RunningStats> = (0..points.len() * chunks)
         .into_par_iter()
         .map(|item| {
@@ -150,14 +171,12 @@ pub fn estimate_points_with_progress(
             let p = &points[i];
             let first = c as u32 * SAMPLES_PER_CHUNK;
             let count = SAMPLES_PER_CHUNK.min(samples - first.min(samples));
-            let mut rng = sampling::rng(seed, ((i as u64) << 32) | c as u64);
+            let mut rng = sampling::rng(seed, ((i as u64) << 32) | (first_chunk + c as u64));
             let mut stats = RunningStats::default();
             for _ in 0..count {
                 stats.push(estimator.radiosity(p.face, p.point, p.normal, &mut rng));
             }
-            if remaining[i].fetch_sub(1, Ordering::AcqRel) == 1 {
-                progress(done.fetch_add(1, Ordering::AcqRel) + 1, total);
-            }
+            chunk_done(i);
             stats
         })
         .collect();
@@ -166,10 +185,7 @@ pub fn estimate_points_with_progress(
         .map(|point_parts| {
             let mut s = RunningStats::default();
             point_parts.iter().for_each(|p| s.merge(p));
-            PointEstimate {
-                mean: s.mean(),
-                std_error: s.std_error(),
-            }
+            s
         })
         .collect()
 }

@@ -28,7 +28,7 @@ use radlab_progressive::{Overshoot, ProgressiveParams, ProgressiveSolver};
 use radlab_scene::form_factor::VisibilitySampling;
 use radlab_scene::{
     Accel, EvalPoint, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size,
-    evaluation_points,
+    error_metric, evaluation_points,
 };
 
 struct Reference {
@@ -68,15 +68,9 @@ fn reference(scene: &Scene, accel: &Accel, count: usize, samples: u32) -> Refere
     }
 }
 
-/// Area-weighted relative L1 error of B, averaged over the three channels.
+/// Relative L1 error of B against the reference (radlab_scene::error_metric).
 fn error(sol: &dyn Solution, r: &Reference) -> f64 {
-    let mut num = Rgb::ZERO;
-    let mut den = Rgb::ZERO;
-    for (p, m) in r.points.iter().zip(&r.mean) {
-        num += (sol.radiosity_at(p.face, p.point) - *m).abs();
-        den += m.abs();
-    }
-    (num / den).element_sum() / 3.0
+    error_metric::solution_errors(sol, &r.points, &r.mean).l1
 }
 
 /// Runs to convergence; returns (step time, trace of (time, error, stats.bytes)).

@@ -20,7 +20,8 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use radlab_matrix::{MatrixParams, MatrixSolver};
 use radlab_progressive::{ProgressiveParams, ProgressiveSolver, StopReason};
 use radlab_scene::{
-    Accel, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size, evaluation_points,
+    Accel, Scene, Solution, Solver, Step, builtin, default_element_size, error_metric,
+    evaluation_points,
 };
 
 fn run<'a>(scene: &'a Scene, accel: &'a Accel, params: ProgressiveParams) -> ProgressiveSolver<'a> {
@@ -29,19 +30,10 @@ fn run<'a>(scene: &'a Scene, accel: &'a Accel, params: ProgressiveParams) -> Pro
     s
 }
 
-/// Area-weighted relative L1 difference (mean over channels) between two solutions at the scene's
-/// evaluation points.
+/// Relative L1 difference (radlab_scene::error_metric) of `a` from `b` at 2,000 of the scene's evaluation
+/// points.
 fn difference(scene: &Scene, a: &dyn Solution, b: &dyn Solution) -> f64 {
-    let (mut num, mut den) = (Rgb::ZERO, Rgb::ZERO);
-    for p in evaluation_points(scene, 2000, 1) {
-        let (x, y) = (
-            a.radiosity_at(p.face, p.point),
-            b.radiosity_at(p.face, p.point),
-        );
-        num += (x - y).abs();
-        den += y.abs();
-    }
-    (num / den).element_sum() / 3.0
+    error_metric::difference(a, b, &evaluation_points(scene, 2000, 1)).l1
 }
 
 fn benches(c: &mut Criterion) {

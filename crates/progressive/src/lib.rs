@@ -49,6 +49,14 @@
 //! | `ambient` | false | add the ambient term to displayed radiosity (keep off when measuring error) |
 //! | `memory_budget_mib` | 2048 | refuse meshes and refinements needing more |
 //! | `overshoot` | `ambient` | `none` (plain Southwell shooting) or `ambient` (overshooting, see above) |
+//! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (see below) |
+//!
+//! **Point answers** (`reconstruction`, radlab_scene::reconstruction): `constant` is the element's value (plus the
+//! ambient term when on); `gouraud` interpolates vertex values over each face's leaf elements, anchoring the
+//! T-vertices adaptive subdivision creates so the field stays continuous; `final-gather` recomputes
+//! B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j from every leaf element (survey 2.5.3). The data is rebuilt at the
+//! first query after a step; a gather's rays and kernel evaluations are reported by
+//! [`ProgressiveSolver::gather_work`], not in `stats()` (answering is charged by whoever asks, per query pass).
 //!
 //! Every default length is relative to the scene's size, the threshold is a relative contrast and the stopping
 //! rule a fraction of emitted power, so the defaults behave the same at any scene scale and light level.
@@ -106,5 +114,5 @@ mod shooting;
 mod solver;
 mod substructuring;
 
-pub use params::{Overshoot, ProgressiveParams};
+pub use params::{DEFAULT_RECONSTRUCTION, Overshoot, ProgressiveParams};
 pub use solver::{ElementView, ProgressiveSolution, ProgressiveSolver, StopReason};

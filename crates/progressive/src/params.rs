@@ -6,7 +6,7 @@
 //! emitted power, so neither depends on the scene's scale or on its light's strength.
 
 use radlab_scene::form_factor::VisibilitySampling;
-use radlab_scene::{MethodParams, Scene, SolveError, default_element_size};
+use radlab_scene::{MethodParams, Reconstruction, Scene, SolveError, default_element_size};
 use serde::{Deserialize, Serialize};
 
 /// Default shooting patch size as a multiple of the element size: each patch shoots from about 2 × 2 elements.
@@ -74,7 +74,13 @@ pub struct ProgressiveParams {
     /// What a shot sends: `none` (plain shooting) or `ambient` (overshooting). Default `ambient`, which needs
     /// far fewer shots at high reflectance (see the crate documentation for measurements).
     pub overshoot: Overshoot,
+    /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
+    /// `final-gather` (radlab_scene::reconstruction). Default [`DEFAULT_RECONSTRUCTION`].
+    pub reconstruction: Reconstruction,
 }
+
+/// Default reconstruction of point answers, chosen by measurement (see the crate documentation).
+pub const DEFAULT_RECONSTRUCTION: Reconstruction = Reconstruction::FinalGather;
 
 impl Default for ProgressiveParams {
     fn default() -> Self {
@@ -93,6 +99,7 @@ impl Default for ProgressiveParams {
             ambient: false,
             memory_budget_mib: DEFAULT_MEMORY_BUDGET_MIB,
             overshoot: Overshoot::default(),
+            reconstruction: DEFAULT_RECONSTRUCTION,
         }
     }
 }
@@ -247,6 +254,13 @@ impl MethodParams for ProgressiveParams {
                  the ambient estimate of what the patch will still receive, Feda & Purgathofer 1992) \
                  (default ambient)",
             ),
+            (
+                "reconstruction",
+                "point answers from the element values: constant | gouraud (vertex-interpolated) | \
+                 final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
+                 answering cost); default final-gather (Cornell box, 512 points: relative L1 3.4% against 10.4% constant and \
+                 9.5% gouraud at 110 mm elements; a gather costs rays per query, so images of large meshes are slow)",
+            ),
         ]
     }
 
@@ -353,6 +367,7 @@ mod tests {
             ("visibility", "sometimes"),
             ("overshoot", "sor"),
             ("shots_per_step", "-3"),
+            ("reconstruction", "smooth"),
         ] {
             let e = ProgressiveParams::from_pairs(&pairs(&[(k, v)]))
                 .expect_err(k)

@@ -10,7 +10,13 @@
 //! about ρ · (unshot fraction) — below the stopping fraction whatever ρ.
 
 use glam::DVec3;
-use radlab_scene::{Accel, FaceId, Polygon, Rgb, Scene, Solution, SolveError, Solver, Stats, Step};
+use std::sync::OnceLock;
+
+use radlab_scene::gouraud::ElementValue;
+use radlab_scene::{
+    Accel, FaceId, Polygon, Reconstruction, Reconstructor, Rgb, Scene, Solution, SolveError,
+    Solver, Stats, Step,
+};
 
 use crate::adaptive_subdivision::{self, Refinement};
 use crate::ambient;
@@ -84,6 +90,7 @@ pub struct ProgressiveSolver<'a> {
     elements_split: u64,
     work: Work,
     stop: Option<StopReason>,
+    output: Output,
 }
 
 impl std::fmt::Debug for ProgressiveSolver<'_> {
@@ -149,6 +156,7 @@ impl<'a> ProgressiveSolver<'a> {
             elements_split: 0,
             work: Work::default(),
             stop: None,
+            output: Output::new(params.reconstruction, seed),
             params,
         };
         s.update_ambient();
@@ -300,6 +308,7 @@ impl Solver for ProgressiveSolver<'_> {
         if self.stop.is_some() {
             return Ok(Step::Converged);
         }
+        self.output.invalidate();
         self.steps += 1;
         let mut shot_any = false;
         for _ in 0..self.params.shots_per_step {
@@ -343,7 +352,10 @@ impl Solver for ProgressiveSolver<'_> {
     }
 
     fn solution(&self) -> &dyn Solution {
-        &self.solution
+        match self.params.reconstruction {
+            Reconstruction::Constant => &self.solution,
+            _ => self,
+        }
     }
 
     fn stats(&self) -> Stats {
@@ -362,6 +374,80 @@ impl Solver for ProgressiveSolver<'_> {
                 + self.scratch.capacity() * size_of::<(f64, Work)>()) as u64,
             residual: Some(self.unshot_fraction()),
         }
+    }
+}
+
+/// The output side: the `reconstruction` parameter's data, rebuilt at the first query after a step.
+#[derive(Debug)]
+struct Output {
+    reconstructor: Reconstructor,
+    /// Position in `mesh.leaves` of each element (u32::MAX for inner elements), for Gouraud lookups.
+    leaf_position: OnceLock<Vec<u32>>,
+}
+
+impl Output {
+    fn new(kind: Reconstruction, seed: u64) -> Self {
+        Self {
+            reconstructor: Reconstructor::new(kind, seed),
+            leaf_position: OnceLock::new(),
+        }
+    }
+
+    fn invalidate(&mut self) {
+        self.reconstructor.invalidate();
+        self.leaf_position.take();
+    }
+}
+
+impl ProgressiveSolver<'_> {
+    /// Rays and point-to-polygon kernel evaluations spent answering queries by final gather so far (zeros
+    /// for the other reconstructions). Not part of [`Solver::stats`], which counts solving only: the runner
+    /// charges answering separately, once per evaluation.
+    pub fn gather_work(&self) -> (u64, u64) {
+        self.output.reconstructor.gather_work()
+    }
+}
+
+/// Point answers through the `reconstruction` parameter (`constant` answers from [`ProgressiveSolution`]).
+/// The ambient term, when on, is added to every element value first.
+impl Solution for ProgressiveSolver<'_> {
+    fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
+        if face >= self.scene.faces.len() {
+            return Rgb::splat(f64::NAN);
+        }
+        let sol = &self.solution;
+        let mesh = &sol.mesh;
+        let located = || sol.locator.locate(mesh, face, point);
+        self.output.reconstructor.radiosity_at(
+            self.scene,
+            self.accel,
+            face,
+            point,
+            || sol.radiosity_at(face, point),
+            || {
+                let positions = self.output.leaf_position.get_or_init(|| {
+                    let mut pos = vec![u32::MAX; mesh.elements.len()];
+                    for (k, &e) in mesh.leaves.iter().enumerate() {
+                        pos[e as usize] = k as u32;
+                    }
+                    pos
+                });
+                located()
+                    .map(|e| positions[e as usize])
+                    .filter(|&k| k != u32::MAX)
+                    .map(|k| k as usize)
+            },
+            || {
+                self.elements()
+                    .into_iter()
+                    .map(|e| ElementValue {
+                        face: e.face,
+                        polygon: e.polygon,
+                        radiosity: e.radiosity + sol.reflectance[e.face] * sol.ambient,
+                    })
+                    .collect()
+            },
+        )
     }
 }
 

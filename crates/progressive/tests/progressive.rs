@@ -6,7 +6,9 @@
 use radlab_progressive::{Overshoot, ProgressiveParams, ProgressiveSolver};
 use radlab_scene::form_factor::VisibilitySampling;
 use radlab_scene::glam::{DVec3, dvec3};
-use radlab_scene::{Accel, Material, Rgb, Scene, SceneBuilder, Solver, Step, builtin};
+use radlab_scene::{
+    Accel, Material, Reconstruction, Rgb, Scene, SceneBuilder, Solver, Step, builtin,
+};
 
 mod common;
 use common::closed_room;
@@ -527,6 +529,7 @@ fn radiosity_at_finds_the_element_and_never_panics() {
         element_size: Some(0.1),
         max_shots: Some(10),
         adaptive_threshold: 0.15,
+        reconstruction: Reconstruction::Constant,
         ..Default::default()
     };
     let mut s = ProgressiveSolver::new(&scene, &accel, params, 1).expect("solver");
@@ -570,4 +573,50 @@ fn scenes_without_light_and_bad_parameters() {
         .expect_err("budget")
         .to_string();
     assert!(e.contains("memory_budget_mib"), "{e}");
+}
+
+#[test]
+fn final_gather_is_exact_for_direct_light_anywhere_and_gouraud_is_continuous() {
+    // Parallel plates (Howell): the emitter's elements hold B = E exactly, so a final gather gives
+    // B(x) = ρ E F(x → emitter) at any receiver point, not only at element centroids; the exact factor is
+    // the point-to-polygon kernel over the whole emitter face.
+    let (e, rho) = (3.0, 0.5);
+    let scene = builtin(&format!(
+        "parallel-squares?emission={e}&reflectance={rho}&distance=0.5"
+    ))
+    .expect("plates");
+    let accel = Accel::new(&scene);
+    let emitter = (0..scene.face_count())
+        .find(|&f| scene.material(f).is_emitter())
+        .expect("emitter");
+    let receiver = 1 - emitter;
+    for reconstruction in [Reconstruction::FinalGather, Reconstruction::Gouraud] {
+        let params = ProgressiveParams {
+            element_size: Some(0.2),
+            reconstruction,
+            ..Default::default()
+        };
+        let mut s = ProgressiveSolver::new(&scene, &accel, params, 1).expect("solver");
+        run(&mut s);
+        for (u, v) in [(0.5, 0.5), (0.03, 0.71), (0.99, 0.01)] {
+            let p = scene.polygon(receiver).point_at(u, v);
+            let b = s.solution().radiosity_at(receiver, p);
+            let exact = rho
+                * e
+                * radlab_scene::form_factor::point_polygon(
+                    p,
+                    scene.faces[receiver].normal,
+                    &scene.polygon(emitter),
+                );
+            if reconstruction == Reconstruction::FinalGather {
+                assert!((b.x - exact).abs() < 1e-12, "({u}, {v}): {b} vs {exact}");
+            } else {
+                // Gouraud: continuous, but only as exact as the linear fit to the element values.
+                assert!(
+                    (b.x - exact).abs() < 0.1 * exact,
+                    "({u}, {v}): {b} vs {exact}"
+                );
+            }
+        }
+    }
 }

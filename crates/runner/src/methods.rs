@@ -1,11 +1,18 @@
 //! The method registry: every solver radlab can run, by name, with its parameters and defaults. A new solver
 //! crate plugs in here with one entry; nothing else in the runner changes.
 
-use radlab_scene::{Accel, MethodParams, Scene, SolveError, Solver};
+use radlab_scene::{Accel, EvalPoint, MethodParams, Scene, SolveError, Solver};
 
-/// Builds a solver from the scene, its accelerator, a parameter table and a seed.
-pub type BuildFn =
-    for<'a> fn(&'a Scene, &'a Accel, toml::Table, u64) -> Result<Box<dyn Solver + 'a>, SolveError>;
+/// Builds a solver from the scene, its accelerator, a parameter table, a seed and the points it will be asked
+/// about. Only methods that answer per point (path tracing) use the points: they trace there in their steps.
+/// Finite-element methods solve the whole scene and ignore them.
+pub type BuildFn = for<'a> fn(
+    &'a Scene,
+    &'a Accel,
+    toml::Table,
+    u64,
+    &[EvalPoint],
+) -> Result<Box<dyn Solver + 'a>, SolveError>;
 
 /// One documented parameter.
 #[derive(Clone, Debug)]
@@ -54,7 +61,7 @@ macro_rules! method {
             name: $name,
             summary: $summary,
             params: param_lines::<$params>,
-            build: |scene, accel, table, seed| {
+            build: |scene, accel, table, seed, _points| {
                 let params = <$params as MethodParams>::from_table(table)?;
                 Ok(Box::new(<$solver>::new(scene, accel, params, seed)?))
             },
@@ -102,17 +109,29 @@ pub fn methods() -> Vec<MethodInfo> {
             radlab_pathtrace::McRadiosityParams,
             radlab_pathtrace::McRadiositySolver
         ),
+        MethodInfo {
+            name: crate::pathtraced::NAME,
+            summary: crate::pathtraced::SUMMARY,
+            params: crate::pathtraced::params,
+            build: |scene, accel, table, seed, points| {
+                let params = radlab_pathtrace::PathTraceParams::from_table(table)?;
+                let points = points
+                    .iter()
+                    .map(radlab_pathtrace::SurfacePoint::from)
+                    .collect();
+                Ok(Box::new(radlab_pathtrace::PathTraceSolver::new(
+                    scene, accel, params, seed, points,
+                )?))
+            },
+            validate: |table| radlab_pathtrace::PathTraceParams::from_table(table).map(|_| ()),
+        },
     ]
 }
 
 /// The method of that name, or an error listing the methods.
 pub fn find(name: &str) -> anyhow::Result<MethodInfo> {
     let all = methods();
-    let names: Vec<&str> = all
-        .iter()
-        .map(|m| m.name)
-        .chain(std::iter::once(crate::pathtraced::NAME))
-        .collect();
+    let names: Vec<&str> = all.iter().map(|m| m.name).collect();
     all.into_iter().find(|m| m.name == name).ok_or_else(|| {
         anyhow::anyhow!(
             "unknown method '{name}'; methods are: {} (see `radlab methods`)",
@@ -123,11 +142,6 @@ pub fn find(name: &str) -> anyhow::Result<MethodInfo> {
 
 /// Checks that `method` exists and `table` holds valid parameters for it.
 pub fn validate_params(method: &str, table: toml::Table) -> anyhow::Result<()> {
-    if method == crate::pathtraced::NAME {
-        anyhow::bail!(
-            "'{method}' is the reference estimator, not a stepped method; it cannot be run as an experiment method (configure it under [reference])"
-        );
-    }
     let m = find(method)?;
     (m.validate)(table)?;
     Ok(())

@@ -1,14 +1,10 @@
-//! The `pathtrace` method: radlab-pathtrace's per-point radiosity estimator used as a method. For probes it
-//! estimates B at the points directly; as a [`Solution`] (for `solve`'s tables and meshes) each query runs the
-//! estimator at that point with a stream derived from the seed and the point's coordinates, so answers are
-//! reproducible; `render` path-traces the camera's pixels with a progress bar.
+//! The `pathtrace` method's runner side: its name, summary and parameters for `radlab methods`, and camera
+//! path tracing for `render` with a progress bar. The stepped method itself (path tracing at given points,
+//! doubling the paths per step) is [`radlab_pathtrace::PathTraceSolver`].
 
 use anyhow::Result;
-use glam::DVec3;
-use radlab_pathtrace::{PointParams, RenderParams, SurfacePoint};
-use radlab_scene::{
-    Accel, Camera, FaceId, Image, MethodParams, Rgb, Scene, Solution, sampling::mix64,
-};
+use radlab_pathtrace::{PathTraceParams, RenderParams};
+use radlab_scene::{Accel, Camera, Image, MethodParams, Scene};
 
 use crate::methods::{ParamLine, param_lines};
 use crate::progress;
@@ -17,79 +13,16 @@ use crate::progress;
 pub const NAME: &str = "pathtrace";
 
 /// One paragraph for `radlab methods`.
-pub const SUMMARY: &str = "Per-point Monte Carlo estimator (next-event estimation with MIS, Russian roulette): \
-    unbiased, mesh-free, with a standard error; the reference every method is measured against. \
-    `render` path-traces the camera (parameter samples_per_pixel).";
+pub const SUMMARY: &str = "Path tracing at the points asked about (next-event estimation with MIS, Russian \
+    roulette): unbiased, mesh-free, with a standard error; each step doubles the paths per point, so its cost \
+    grows with the number of points answered (a finite-element solution pays once for the scene). The same \
+    estimator with many paths is the reference. `render` path-traces the camera (parameter samples_per_pixel).";
 
 /// Its parameters (per-point, then render).
 pub fn params() -> Vec<ParamLine> {
-    let mut p = param_lines::<PointParams>();
+    let mut p = param_lines::<PathTraceParams>();
     p.extend(param_lines::<RenderParams>());
     p
-}
-
-/// The estimator as a solution.
-pub struct PathTracedSolution<'a> {
-    scene: &'a Scene,
-    accel: &'a Accel,
-    params: PointParams,
-    seed: u64,
-}
-
-impl<'a> PathTracedSolution<'a> {
-    /// Validates the parameters.
-    pub fn new(scene: &'a Scene, accel: &'a Accel, table: toml::Table, seed: u64) -> Result<Self> {
-        Ok(Self {
-            scene,
-            accel,
-            params: PointParams::from_table(table)?,
-            seed,
-        })
-    }
-
-    fn surface_point(&self, face: FaceId, point: DVec3) -> SurfacePoint {
-        SurfacePoint {
-            face,
-            point,
-            normal: self.scene.faces[face].normal,
-        }
-    }
-
-    /// Estimates at many points at once (parallel, with a progress bar on a terminal).
-    pub fn estimate(&self, points: &[(FaceId, DVec3)]) -> Vec<Rgb> {
-        let pts: Vec<SurfacePoint> = points
-            .iter()
-            .map(|&(f, p)| self.surface_point(f, p))
-            .collect();
-        let bar = progress::bar(pts.len() as u64, "pathtrace points");
-        let est = radlab_pathtrace::estimate_points_with_progress(
-            self.scene,
-            self.accel,
-            &pts,
-            &self.params,
-            self.seed,
-            &|done, _| bar.set_position(done as u64),
-        );
-        bar.finish_and_clear();
-        est.into_iter().map(|e| e.mean).collect()
-    }
-}
-
-impl Solution for PathTracedSolution<'_> {
-    fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        let key = mix64(
-            point.x.to_bits() ^ mix64(point.y.to_bits() ^ mix64(point.z.to_bits() ^ face as u64)),
-        );
-        let pts = [self.surface_point(face, point)];
-        radlab_pathtrace::estimate_points(
-            self.scene,
-            self.accel,
-            &pts,
-            &self.params,
-            mix64(self.seed ^ key),
-        )[0]
-        .mean
-    }
 }
 
 /// Path-traces the camera: (mean radiance, standard error) images.

@@ -60,13 +60,10 @@ fn csv_rows(p: &Path) -> Vec<csv::StringRecord> {
     r.records().map(|x| x.expect("row")).collect()
 }
 
-#[test]
-fn tiny_experiment_end_to_end_then_skips() {
-    let tmp = tempfile::tempdir().expect("tmp");
-    let cfg = write_config(tmp.path(), "tiny.toml", TINY);
-    let out = tmp.path().join("out");
+/// `radlab run CFG --out OUT` in `dir`, which must succeed; its output.
+fn run_ok(dir: &Path, cfg: &Path, out: &Path) -> Output {
     let o = radlab(
-        tmp.path(),
+        dir,
         &[
             "run",
             cfg.to_str().expect("utf8"),
@@ -76,6 +73,15 @@ fn tiny_experiment_end_to_end_then_skips() {
         &[],
     );
     assert!(o.status.success(), "{}", text(&o));
+    o
+}
+
+#[test]
+fn tiny_experiment_end_to_end_then_skips() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let cfg = write_config(tmp.path(), "tiny.toml", TINY);
+    let out = tmp.path().join("out");
+    run_ok(tmp.path(), &cfg, &out);
     let runs = csv_rows(&out.join("runs.csv"));
     assert_eq!(runs.len(), 4, "2 scenes x 2 sweep points");
     let trace = csv_rows(&out.join("trace.csv"));
@@ -113,17 +119,7 @@ fn tiny_experiment_end_to_end_then_skips() {
         assert!(r.floor_l1 > 0.0 && r.l1.is_finite(), "{r:?}");
     }
     // Run again: everything is skipped.
-    let o = radlab(
-        tmp.path(),
-        &[
-            "run",
-            cfg.to_str().expect("utf8"),
-            "--out",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", text(&o));
+    let o = run_ok(tmp.path(), &cfg, &out);
     assert!(
         text(&o).contains("0 runs executed, 4 skipped"),
         "{}",
@@ -308,4 +304,113 @@ fn config_errors_name_the_key() {
     }
     let o = radlab(tmp.path(), &["run", "missing.toml"], &[]);
     assert!(!o.status.success() && text(&o).contains("missing.toml"));
+}
+
+/// Rows of a scene's trace as (step, l1) pairs.
+fn trace_l1(out: &Path, scene: &str) -> Vec<(u64, f64)> {
+    let mut r = csv::Reader::from_path(out.join("trace.csv")).expect("trace.csv");
+    let h = r.headers().expect("header").clone();
+    let col = |n: &str| h.iter().position(|x| x == n).expect(n);
+    let (sc, step, l1) = (col("scene"), col("step"), col("l1"));
+    r.records()
+        .map(|x| x.expect("row"))
+        .filter(|x| &x[sc] == scene)
+        .map(|x| (x[step].parse().expect("step"), x[l1].parse().expect("l1")))
+        .collect()
+}
+
+#[test]
+fn pathtrace_experiment_error_falls_as_one_over_root_paths() {
+    // A furnace (exact answer B = E/(1 − ρ)): path tracing's error is pure noise, so its relative L1 over the
+    // points falls as paths^(-1/2). Step k has 16 · 2^(k−1) paths per point; the least-squares slope of
+    // ln L1 against ln paths over 7 doublings must be −0.5 ± 0.05 (the L1 over 256 points fluctuates by
+    // about 0.75/√256 ≈ 5% relative, i.e. ±0.05 in ln L1, giving a slope uncertainty near 0.02 over a span of
+    // ln 64 ≈ 4.2).
+    let tmp = tempfile::tempdir().expect("tmp");
+    let cfg = write_config(
+        tmp.path(),
+        "pt.toml",
+        r#"
+name = "pt"
+seeds = [1]
+[evaluation]
+points = 256
+growth = 1.0
+[outputs]
+plots = true
+images = false
+[[scenes]]
+scene = "builtin:furnace-cube?reflectance=0.5&tessellation=2"
+label = "furnace"
+[[methods]]
+method = "pathtrace"
+params = { initial_samples = 16, samples = 1024 }
+"#,
+    );
+    let out = tmp.path().join("out");
+    run_ok(tmp.path(), &cfg, &out);
+    let trace = trace_l1(&out, "furnace");
+    assert_eq!(trace.len(), 7, "{trace:?}");
+    let pts: Vec<(f64, f64)> = trace
+        .iter()
+        .map(|&(k, e)| ((16.0 * 2f64.powi(k as i32 - 1)).ln(), e.ln()))
+        .collect();
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let slope = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
+        / pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+    assert!((slope + 0.5).abs() <= 0.05, "slope {slope}: {trace:?}");
+    let report = std::fs::read_to_string(out.join("report.md")).expect("report");
+    assert!(report.contains("pathtrace"), "{report}");
+}
+
+#[test]
+fn pathtrace_seed_changes_its_estimates_not_the_reference() {
+    // Two experiments differing only in the method's seed share one path-traced reference (one cache file,
+    // reused), while the method's estimates differ. A method seed equal to the reference's seed still gives
+    // estimates different from the reference (its streams are its own).
+    let tmp = tempfile::tempdir().expect("tmp");
+    let body = |seed: u64| {
+        format!(
+            r#"
+name = "ptseed"
+seeds = [{seed}]
+[evaluation]
+points = 24
+[reference]
+samples = 64
+seed = 12345
+[outputs]
+images = false
+plots = false
+[[scenes]]
+scene = "builtin:cornell"
+label = "cornell"
+[[methods]]
+method = "pathtrace"
+params = {{ initial_samples = 64, samples = 64 }}
+"#
+        )
+    };
+    let mut l1 = Vec::new();
+    for seed in [1u64, 2, 12345] {
+        let cfg = write_config(tmp.path(), &format!("s{seed}.toml"), &body(seed));
+        let out = tmp.path().join(format!("out{seed}"));
+        run_ok(tmp.path(), &cfg, &out);
+        let t = trace_l1(&out, "cornell");
+        l1.push(t.last().expect("a trace row").1);
+    }
+    let refs: Vec<_> = std::fs::read_dir(tmp.path().join("references"))
+        .expect("references dir")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(refs.len(), 1, "one shared reference: {refs:?}");
+    assert!(
+        l1[0] != l1[1],
+        "seeds 1 and 2 give the same estimates: {l1:?}"
+    );
+    assert!(l1.iter().all(|&e| e > 0.0), "{l1:?}");
 }

@@ -7,7 +7,8 @@ use std::ops::Range;
 
 use glam::DVec3;
 
-use crate::{FaceId, Polygon, Scene};
+use crate::gouraud::ElementValue;
+use crate::{FaceId, Polygon, Rgb, Scene};
 
 /// The default element size as a fraction of the scene's bounding-box diagonal, so every scene's scale gets the
 /// same mesh: 1/20 of the diagonal gives the Cornell box about 1,000 elements.
@@ -97,6 +98,19 @@ impl ElementMesh {
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.elements.len() * size_of::<Element>() + self.face_start.len() * 4
+    }
+
+    /// Every element with its value from `radiosity` (in element order), as the reconstructions take them.
+    pub fn values(&self, radiosity: &[Rgb]) -> Vec<ElementValue> {
+        self.elements
+            .iter()
+            .zip(radiosity)
+            .map(|(e, &b)| ElementValue {
+                face: e.face as FaceId,
+                polygon: e.polygon,
+                radiosity: b,
+            })
+            .collect()
     }
 }
 

@@ -30,10 +30,4 @@ pub fn methods() {
         print_params(&(m.params)());
         println!();
     }
-    println!(
-        "{}\n    {}",
-        crate::pathtraced::NAME,
-        crate::pathtraced::SUMMARY
-    );
-    print_params(&crate::pathtraced::params());
 }

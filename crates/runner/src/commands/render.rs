@@ -52,7 +52,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         println!("wrote {} and {}", args.out.display(), side.display());
         return Ok(());
     }
-    let solved = solve(&loaded, a)?;
+    let solved = solve(&loaded, a, &[])?;
     let image = radlab_scene::render_solution(
         &loaded.scene,
         &loaded.accel,

@@ -6,11 +6,11 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::Result;
-use radlab_scene::{Accel, Scene, Solution, Solver, params};
+use radlab_scene::{Accel, EvalPoint, Scene, Solution, Solver, params};
 
 use crate::output::{exr_image, faces_csv, ply_radiosity};
 use crate::solve_loop::{self, Limits, Outcome, StepRecord};
-use crate::{methods, pathtraced, progress, scene_spec};
+use crate::{methods, progress, scene_spec};
 
 /// Options shared by solve, probe and render.
 #[derive(Clone, Debug, clap::Args)]
@@ -68,37 +68,26 @@ pub fn load(spec: &str) -> Result<Loaded> {
     Ok(Loaded { scene, accel })
 }
 
-/// A finished solve: either a stepped solver or the per-point path tracer.
-pub enum Solved<'a> {
-    /// A finite-element or mesh-based Monte Carlo solver after its last step.
-    Solver(Box<dyn Solver + 'a>, Outcome, StepRecord),
-    /// The per-point estimator, which needs no solve.
-    PathTraced(pathtraced::PathTracedSolution<'a>),
-}
+/// A finished solve: the solver after its last step, why it stopped, and the last step's record.
+pub struct Solved<'a>(pub Box<dyn Solver + 'a>, pub Outcome, pub StepRecord);
 
 impl Solved<'_> {
     /// The solution.
     pub fn solution(&self) -> &dyn Solution {
-        match self {
-            Solved::Solver(s, ..) => s.solution(),
-            Solved::PathTraced(p) => p,
-        }
+        self.0.solution()
     }
 }
 
-/// Builds the method and runs it to its stopping rule, with a spinner on a terminal.
-pub fn solve<'a>(loaded: &'a Loaded, args: &MethodArgs) -> Result<Solved<'a>> {
+/// Builds the method and runs it to its stopping rule, with a spinner on a terminal. `points` are the points
+/// that will be asked about (path tracing traces there; other methods ignore them).
+pub fn solve<'a>(
+    loaded: &'a Loaded,
+    args: &MethodArgs,
+    points: &[EvalPoint],
+) -> Result<Solved<'a>> {
     let table = args.table()?;
-    if args.method == pathtraced::NAME {
-        return Ok(Solved::PathTraced(pathtraced::PathTracedSolution::new(
-            &loaded.scene,
-            &loaded.accel,
-            table,
-            args.seed,
-        )?));
-    }
     let method = methods::find(&args.method)?;
-    let mut solver = (method.build)(&loaded.scene, &loaded.accel, table, args.seed)?;
+    let mut solver = (method.build)(&loaded.scene, &loaded.accel, table, args.seed, points)?;
     let bar = progress::spinner(&format!("{} on {}", args.method, loaded.scene.name));
     let (outcome, last) = solve_loop::run(&mut *solver, args.limits()?, |_, rec| {
         bar.set_message(format!(
@@ -112,7 +101,7 @@ pub fn solve<'a>(loaded: &'a Loaded, args: &MethodArgs) -> Result<Solved<'a>> {
         Ok(())
     })?;
     bar.finish_and_clear();
-    Ok(Solved::Solver(solver, outcome, last))
+    Ok(Solved(solver, outcome, last))
 }
 
 /// Options of `radlab solve`.
@@ -148,7 +137,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
             .collect();
         PathBuf::from("results/solve").join(format!("{stem}-{}", a.method))
     });
-    let solved = solve(&loaded, a)?;
+    let solved = solve(&loaded, a, &[])?;
     let solution = solved.solution();
     let means = faces_csv::face_means(scene, solution);
     faces_csv::write_faces_csv(&out.join("faces.csv"), scene, &means)?;
@@ -165,26 +154,22 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         exr_image::write_exr(&out.join("image.exr"), &image)?;
         written.push("image.exr");
     }
-    match &solved {
-        Solved::Solver(s, outcome, rec) => {
-            let st = s.stats();
-            println!(
-                "{} on {}: {} after {} steps, {:.3} s wall, {:.3} s CPU; {} elements, {} links, {} form factors, {} rays, {:.1} MiB held",
-                a.method,
-                scene.name,
-                outcome.as_str(),
-                rec.step,
-                rec.wall.as_secs_f64(),
-                rec.cpu.as_secs_f64(),
-                st.elements,
-                st.links,
-                st.form_factors,
-                st.rays,
-                st.bytes as f64 / 1048576.0
-            );
-        }
-        Solved::PathTraced(_) => println!("{} on {}: per-point estimates", a.method, scene.name),
-    }
+    let Solved(s, outcome, rec) = &solved;
+    let st = s.stats();
+    println!(
+        "{} on {}: {} after {} steps, {:.3} s wall, {:.3} s CPU; {} elements, {} links, {} form factors, {} rays, {:.1} MiB held",
+        a.method,
+        scene.name,
+        outcome.as_str(),
+        rec.step,
+        rec.wall.as_secs_f64(),
+        rec.cpu.as_secs_f64(),
+        st.elements,
+        st.links,
+        st.form_factors,
+        st.rays,
+        st.bytes as f64 / 1048576.0
+    );
     println!("wrote {} in {}", written.join(", "), out.display());
     Ok(())
 }

@@ -52,6 +52,10 @@ pub struct Evaluation {
     pub seed: u64,
     /// Evaluate the error after every `every`-th step (the last step is always evaluated).
     pub every: u64,
+    /// Evaluate only once the solving time has grown by this factor since the last evaluation (default
+    /// 1.25; 1 = at every `every`-th step). Keeps the number of evaluations logarithmic in the run's length,
+    /// which matters when answering is costly (final gather) or steps are many (progressive shots).
+    pub growth: f64,
 }
 
 impl Default for Evaluation {
@@ -60,6 +64,7 @@ impl Default for Evaluation {
             points: 1024,
             seed: 0,
             every: 1,
+            growth: 1.25,
         }
     }
 }
@@ -160,6 +165,9 @@ pub struct OutputsConfig {
     pub image_height: u32,
     /// Samples per pixel when rendering a method's solution.
     pub image_spp: u32,
+    /// Most paths per pixel of a `pathtrace` run's image: it is rendered at the paths per point the run
+    /// reached, capped here (default 64) because a camera image costs pixels × paths.
+    pub pathtrace_image_spp: u32,
 }
 
 impl Default for OutputsConfig {
@@ -170,6 +178,7 @@ impl Default for OutputsConfig {
             image_width: 0,
             image_height: 0,
             image_spp: 4,
+            pathtrace_image_spp: 64,
         }
     }
 }
@@ -377,6 +386,12 @@ impl ExperimentConfig {
             bail!(
                 "evaluation.points: {} is outside 1..=10000000",
                 self.evaluation.points
+            );
+        }
+        if !(self.evaluation.growth >= 1.0 && self.evaluation.growth.is_finite()) {
+            bail!(
+                "evaluation.growth: {} must be a finite factor >= 1 (1 evaluates at every eligible step)",
+                self.evaluation.growth
             );
         }
         if self.evaluation.every == 0 {

@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use radlab_scene::{Accel, EvalPoint, Rgb, Solution};
+use radlab_scene::{Accel, EvalPoint, MethodParams, Rgb, Solution};
 use serde::{Deserialize, Serialize};
 
 use super::config::{Evaluation, LimitsConfig, OutputsConfig, ReferenceKind, RunSpec};
@@ -80,6 +80,20 @@ pub struct RunResult {
     pub wall_s: f64,
     /// CPU seconds in steps (all threads).
     pub cpu_s: f64,
+    /// Evaluation points the run was measured (and, for path tracing, traced) at.
+    #[serde(default)]
+    pub points: u64,
+    /// Wall seconds of answering at the evaluation points once, after the last step (a final gather's cost;
+    /// near zero for constant and Gouraud reconstructions and for path tracing, which traces in its steps).
+    #[serde(default)]
+    pub answer_s: f64,
+    /// Rays cast answering at the evaluation points once, after the last step.
+    #[serde(default)]
+    pub answer_rays: u64,
+    /// Wall seconds of rendering the run's image (camera path tracing at the paths per point reached, for
+    /// `pathtrace`; primary rays through the solution's reconstruction otherwise); 0 without images.
+    #[serde(default)]
+    pub image_s: f64,
     /// Peak resident memory of the run's process, bytes.
     pub peak_rss_bytes: u64,
     /// Elements.
@@ -130,6 +144,12 @@ pub struct TraceRow {
     pub wall_s: f64,
     /// CPU seconds of steps so far.
     pub cpu_s: f64,
+    /// Wall seconds of answering at the evaluation points after this step (once, not summed over steps).
+    #[serde(default)]
+    pub answer_s: f64,
+    /// Rays of answering at the evaluation points after this step.
+    #[serde(default)]
+    pub answer_rays: u64,
     /// Elements.
     pub elements: u64,
     /// Links.
@@ -185,6 +205,7 @@ fn base_result(job: &Job) -> RunResult {
         params: s.params_string(),
         sweep: s.sweep.clone(),
         seed: s.seed,
+        points: job.evaluation.points as u64,
         floor_l1: job.floor.l1,
         floor_l2: job.floor.l2,
         reference: format!("{:?}", job.reference_kind).to_lowercase(),
@@ -209,18 +230,26 @@ pub fn read_result(path: &Path) -> Result<RunResult> {
     serde_json::from_str(&text).with_context(|| format!("{}: malformed run result", path.display()))
 }
 
+/// Errors of the solution at the points, with the wall time and rays answering took: answering is part of a
+/// method's cost (a final gather casts rays at every query), charged once per evaluation.
 fn evaluate(
     solution: &dyn Solution,
+    accel: &Accel,
     points: &[EvalPoint],
     reference: &[Rgb],
     weights: &[f64],
-) -> Errors {
+) -> (Errors, f64, u64) {
     use rayon::prelude::*;
+    let (t0, rays0) = (Instant::now(), accel.rays_cast());
     let values: Vec<Rgb> = points
         .par_iter()
         .map(|p| solution.radiosity_at(p.face, p.point))
         .collect();
-    metrics::errors(&values, reference, weights)
+    let (secs, rays) = (
+        t0.elapsed().as_secs_f64(),
+        accel.rays_cast().saturating_sub(rays0),
+    );
+    (metrics::errors(&values, reference, weights), secs, rays)
 }
 
 /// Runs a job in this process and writes its files. Failures of the method become the run's outcome.
@@ -247,7 +276,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let (reference, _) = reference::read_cache(&job.reference_file, points.len())?;
     let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
     let method = crate::methods::find(&spec.method)?;
-    let mut solver = (method.build)(&scene, &accel, spec.params.clone(), spec.seed)?;
+    let mut solver = (method.build)(&scene, &accel, spec.params.clone(), spec.seed, &points)?;
     let limits = Limits {
         max_steps: job.limits.max_steps,
         time_limit: Duration::from_secs_f64(job.limits.time_limit),
@@ -260,11 +289,19 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     };
     let target = job.limits.target_error;
     let every = job.evaluation.every;
-    // The after-step hook evaluates outside the timed region; reaching the target error ends the run.
+    let growth = job.evaluation.growth;
+    let mut next_eval = 0.0;
+    let mut last_answer = (0.0, 0u64);
+    // The after-step hook evaluates outside the solver's timed region, timing the answering separately;
+    // reaching the target error ends the run.
     let run = solve_loop::run(&mut *solver, limits, |s, rec| {
-        if rec.step % every == 0 || rec.step == 1 {
-            last_eval = evaluate(s.solution(), &points, &reference, &weights);
-            trace.push(row(spec, rec, last_eval));
+        let wall = rec.wall.as_secs_f64();
+        if (rec.step % every == 0 && wall >= next_eval) || rec.step == 1 {
+            let (e, secs, rays) = evaluate(s.solution(), &accel, &points, &reference, &weights);
+            last_eval = e;
+            last_answer = (secs, rays);
+            trace.push(row(spec, rec, last_eval, last_answer));
+            next_eval = wall * growth;
             if target > 0.0 && last_eval.l1 <= target {
                 anyhow::bail!(TargetReached);
             }
@@ -285,9 +322,12 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         Err(e) => return Err(e),
     };
     if trace.last().is_none_or(|t| t.step != rec.step) {
-        last_eval = evaluate(solver.solution(), &points, &reference, &weights);
-        trace.push(row(spec, &rec, last_eval));
+        let (e, secs, rays) = evaluate(solver.solution(), &accel, &points, &reference, &weights);
+        last_eval = e;
+        last_answer = (secs, rays);
+        trace.push(row(spec, &rec, last_eval, last_answer));
     }
+    (result.answer_s, result.answer_rays) = last_answer;
     result.outcome = outcome;
     result.steps = rec.step;
     result.wall_s = rec.wall.as_secs_f64();
@@ -312,14 +352,32 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     if job.outputs.images
         && let Some(camera) = super::images::camera_for(&scene, &job.outputs)
     {
-        let image = radlab_scene::render_solution(
-            &scene,
-            &accel,
-            &camera,
-            solver.solution(),
-            job.outputs.image_spp,
-            spec.seed,
-        );
+        let t0 = Instant::now();
+        let image = if spec.method == crate::pathtraced::NAME {
+            // Path tracing's image costs paths per pixel: render it at the paths per point the run reached
+            // (capped by outputs.pathtrace_image_spp).
+            let params = radlab_pathtrace::PathTraceParams::from_table(spec.params.clone())?;
+            let reached = (0..rec.step.saturating_sub(1))
+                .fold(params.initial_samples.min(params.samples), |n, _| {
+                    (2 * n).min(params.samples)
+                });
+            let render = radlab_pathtrace::RenderParams {
+                samples_per_pixel: reached.min(job.outputs.pathtrace_image_spp).max(1),
+                max_depth: params.max_depth,
+                direct: params.direct,
+            };
+            radlab_pathtrace::render(&scene, &accel, &camera, &render, spec.seed, &|_, _| {}).0
+        } else {
+            radlab_scene::render_solution(
+                &scene,
+                &accel,
+                &camera,
+                solver.solution(),
+                job.outputs.image_spp,
+                spec.seed,
+            )
+        };
+        result.image_s = t0.elapsed().as_secs_f64();
         write_exr(&image_path(&job.dir, &result.id), &image)?;
     }
     Ok(())
@@ -334,7 +392,7 @@ impl std::fmt::Display for TargetReached {
 }
 impl std::error::Error for TargetReached {}
 
-fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors) -> TraceRow {
+fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors, answer: (f64, u64)) -> TraceRow {
     let st = rec.stats;
     TraceRow {
         id: spec.id(),
@@ -345,6 +403,8 @@ fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors) -> TraceRow {
         step: rec.step,
         wall_s: rec.wall.as_secs_f64(),
         cpu_s: rec.cpu.as_secs_f64(),
+        answer_s: answer.0,
+        answer_rays: answer.1,
         elements: st.elements,
         links: st.links,
         form_factors: st.form_factors,

@@ -11,7 +11,7 @@ pub mod config;
 pub mod digest;
 pub mod execute;
 pub mod images;
-pub mod metrics;
+pub use radlab_scene::error_metric as metrics;
 pub mod plots;
 pub mod reference;
 pub mod report;
@@ -280,6 +280,7 @@ pub fn redraw(out: &Path, name: &str, description: &str, plots_on: bool) -> Resu
     let runs = tables::read_runs(&out.join("runs.csv"))?;
     let trace = tables::read_trace(&out.join("trace.csv"))?;
     let mut figures: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    let mut image_errors: BTreeMap<(String, String), f64> = BTreeMap::new();
     let mut scenes: Vec<String> = Vec::new();
     for r in &runs {
         if !scenes.contains(&r.scene) {
@@ -324,6 +325,7 @@ pub fn redraw(out: &Path, name: &str, description: &str, plots_on: bool) -> Resu
                 config::label_from_spec(label)
             ));
             if let Ok(mean) = images::difference_png(&diff, &img, &reference) {
+                image_errors.insert((scene.clone(), label.to_string()), mean);
                 figs.push(relative(out, &diff));
                 tiles.push((
                     label.to_string(),
@@ -347,7 +349,7 @@ pub fn redraw(out: &Path, name: &str, description: &str, plots_on: bool) -> Resu
     }
     report::write_report(
         out,
-        &report::markdown(name, description, &runs, &trace, &figures),
+        &report::markdown(name, description, &runs, &trace, &figures, &image_errors),
     )
 }
 

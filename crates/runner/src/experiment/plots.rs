@@ -1,8 +1,12 @@
 //! Plots of an experiment (plotters, PNG and SVG), drawn from `runs.csv` and `trace.csv` only, so
 //! `radlab plot DIR` redraws them anywhere: per scene, relative L1 error against wall time of every run
 //! (convergence), final error against time across each method's sweep (the speed/accuracy frontier), and final
-//! error against rays cast and against memory held. Log-log axes; the reference's noise floor as a dashed line.
-//! Text uses DejaVu Sans embedded in the binary, so no system font library is needed.
+//! error against rays cast and against memory held. Log-log axes with ticks at 1-2-5 (or 1-3 for errors, shown as
+//! percentages: 1%, 3%, 10%) times powers of ten, each label once; the reference's noise floor as a dashed line
+//! labelled with its value; the legend beside the plot area, never over data. PNG and SVG come from one
+//! drawing routine, so they hold the same content. Time is the time to answer at the experiment's points: the
+//! solver's steps plus one answering pass (a final gather's cost). Text uses DejaVu Sans embedded in the
+//! binary, so no system font library is needed.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -10,6 +14,7 @@ use std::sync::Once;
 
 use anyhow::{Result, anyhow};
 use plotters::coord::Shift;
+use plotters::coord::combinators::BindKeyPoints;
 use plotters::prelude::*;
 
 use super::execute::{RunResult, TraceRow};
@@ -30,7 +35,7 @@ pub fn ensure_font() {
 
 /// Colour of the k-th method.
 pub fn colour(k: usize) -> RGBColor {
-    const C: [RGBColor; 8] = [
+    const C: [RGBColor; 12] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -39,6 +44,10 @@ pub fn colour(k: usize) -> RGBColor {
         RGBColor(140, 86, 75),
         RGBColor(227, 119, 194),
         RGBColor(23, 190, 207),
+        RGBColor(188, 189, 34),
+        RGBColor(0, 0, 0),
+        RGBColor(127, 127, 127),
+        RGBColor(255, 187, 120),
     ];
     C[k % C.len()]
 }
@@ -65,6 +74,58 @@ pub struct Plot {
     pub series: Vec<Series>,
     /// A dashed horizontal line with its label (the noise floor).
     pub hline: Option<(f64, String)>,
+    /// Whether y is a relative error (ticks at 1-3 steps, labelled as percentages).
+    pub y_is_error: bool,
+}
+
+/// Tick values for a log axis over [lo, hi]: `mantissas` × 10^k inside the range (1-2-5 or 1-3 steps), thinned to
+/// powers of ten when there would be more than 12.
+pub fn log_ticks(lo: f64, hi: f64, mantissas: &[f64]) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && lo.is_finite() && hi.is_finite()) {
+        return Vec::new();
+    }
+    let ticks = |ms: &[f64]| -> Vec<f64> {
+        let mut out = Vec::new();
+        for k in (lo.log10().floor() as i32 - 1)..=(hi.log10().ceil() as i32 + 1) {
+            for m in ms {
+                let v = m * 10f64.powi(k);
+                // Round to 12 significant digits so 3 × 10^-2 prints as 0.03, not 0.030000000000000002.
+                let v = format!("{v:.11e}").parse::<f64>().unwrap_or(v);
+                if v >= lo && v <= hi {
+                    out.push(v);
+                }
+            }
+        }
+        out
+    };
+    let t = ticks(mantissas);
+    if t.len() > 12 { ticks(&[1.0]) } else { t }
+}
+
+/// A number with at most 3 significant digits and no trailing zeros: 0.03, 1.5, 200, 2e+06.
+pub fn fmt_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let e = v.abs().log10().floor() as i32;
+    if !(-4..6).contains(&e) {
+        let s = format!("{v:.2e}");
+        let (m, x) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = m.trim_end_matches('0').trim_end_matches('.');
+        return format!("{m}e{x}");
+    }
+    let decimals = (2 - e).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// A relative error as a percentage: 0.03 → "3%", 0.005 → "0.5%".
+pub fn fmt_percent(v: f64) -> String {
+    format!("{}%", fmt_number(v * 100.0))
 }
 
 fn bounds(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
@@ -93,19 +154,45 @@ where
     let Some(yr) = bounds(pts().map(|p| p.1).chain(plot.hline.iter().map(|h| h.0))) else {
         return Ok(());
     };
-    let mut chart = ChartBuilder::on(&root)
+    // The legend gets its own column on the right, so it never covers data.
+    let labelled: Vec<&Series> = plot.series.iter().filter(|s| s.label.is_some()).collect();
+    let (w, _) = root.dim_in_pixel();
+    let legend_w = if labelled.is_empty() {
+        0
+    } else {
+        210.min(w / 3)
+    };
+    let (plot_area, legend_area) = root.split_horizontally(w - legend_w);
+    let y_mantissas: &[f64] = if plot.y_is_error {
+        &[1.0, 3.0]
+    } else {
+        &[1.0, 2.0, 5.0]
+    };
+    let x_ticks = log_ticks(xr.0, xr.1, &[1.0, 2.0, 5.0]);
+    let y_ticks = log_ticks(yr.0, yr.1, y_mantissas);
+    let mut chart = ChartBuilder::on(&plot_area)
         .caption(&plot.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale())
+        .build_cartesian_2d(
+            (xr.0..xr.1).log_scale().with_key_points(x_ticks),
+            (yr.0..yr.1).log_scale().with_key_points(y_ticks),
+        )
         .map_err(e)?;
+    let y_fmt = |v: &f64| {
+        if plot.y_is_error {
+            fmt_percent(*v)
+        } else {
+            fmt_number(*v)
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(&plot.x_label)
         .y_desc(&plot.y_label)
-        .x_label_formatter(&|v| format!("{v:.2e}"))
-        .y_label_formatter(&|v| format!("{v:.1e}"))
+        .x_label_formatter(&|v| fmt_number(*v))
+        .y_label_formatter(&y_fmt)
         .label_style(("sans-serif", 12))
         .draw()
         .map_err(e)?;
@@ -117,14 +204,9 @@ where
             .copied()
             .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
             .collect();
-        let line = chart
+        chart
             .draw_series(LineSeries::new(points.clone(), c.stroke_width(2)))
             .map_err(e)?;
-        if let Some(label) = &s.label {
-            line.label(label.clone()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
-            });
-        }
         chart
             .draw_series(points.iter().map(|&p| Circle::new(p, 3, c.filled())))
             .map_err(e)?;
@@ -144,22 +226,37 @@ where
                 .draw_series(LineSeries::new(seg.to_vec(), BLACK.stroke_width(1)))
                 .map_err(e)?;
         }
+        let value = if plot.y_is_error {
+            fmt_percent(*y)
+        } else {
+            fmt_number(*y)
+        };
         chart
             .draw_series(std::iter::once(Text::new(
-                label.clone(),
-                (xr.0 * 1.1, *y * 1.15),
+                format!("{label} {value}"),
+                (xr.0 * 1.1, *y * 1.12),
                 ("sans-serif", 12),
             )))
             .map_err(e)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(e)?;
+    // Legend: one line and name per labelled series, top-aligned with the plot area.
+    for (k, s) in labelled.iter().enumerate() {
+        let c = colour(s.colour);
+        let y = 50 + 22 * k as i32;
+        legend_area
+            .draw(&PathElement::new(vec![(8, y), (32, y)], c.stroke_width(2)))
+            .map_err(e)?;
+        legend_area
+            .draw(&Circle::new((20, y), 3, c.filled()))
+            .map_err(e)?;
+        legend_area
+            .draw(&Text::new(
+                s.label.clone().unwrap_or_default(),
+                (38, y - 7),
+                ("sans-serif", 13),
+            ))
+            .map_err(e)?;
+    }
     root.present().map_err(e)?;
     Ok(())
 }
@@ -200,6 +297,12 @@ pub fn scene_plots(
         .map(|r| r.floor_l1)
         .find(|f| *f > 0.0)
         .map(|f| (f, "reference noise floor".to_string()));
+    let points = runs.iter().map(|r| r.points).max().unwrap_or(0);
+    let time_label = if points > 0 {
+        format!("time to answer at {points} points (s)")
+    } else {
+        "time to answer (s)".to_string()
+    };
     let figs = dir.join("figures");
     let mut written = Vec::new();
 
@@ -211,7 +314,7 @@ pub fn scene_plots(
         by_run
             .entry(t.id.as_str())
             .or_default()
-            .push((t.wall_s, t.l1));
+            .push((t.wall_s + t.answer_s, t.l1));
     }
     for r in &runs {
         if let Some(points) = by_run.remove(r.id.as_str()) {
@@ -227,10 +330,11 @@ pub fn scene_plots(
         &figs.join(format!("convergence-{scene}")),
         &Plot {
             title: format!("{scene}: error against time"),
-            x_label: "wall time of steps (s)".into(),
+            x_label: time_label.clone(),
             y_label: "relative L1 error".into(),
             series,
             hline: floor.clone(),
+            y_is_error: true,
         },
     )?);
 
@@ -257,14 +361,14 @@ pub fn scene_plots(
         (
             "frontier",
             "speed/accuracy frontier",
-            "wall time of steps (s)",
-            (&|r: &RunResult| r.wall_s) as &dyn Fn(&RunResult) -> f64,
+            time_label.as_str(),
+            (&|r: &RunResult| r.wall_s + r.answer_s) as &dyn Fn(&RunResult) -> f64,
         ),
         (
             "error-vs-rays",
             "error against rays cast",
-            "rays",
-            &|r: &RunResult| r.rays as f64,
+            "rays (solving and answering)",
+            &|r: &RunResult| (r.rays + r.answer_rays) as f64,
         ),
         (
             "error-vs-memory",
@@ -281,6 +385,7 @@ pub fn scene_plots(
                 y_label: "final relative L1 error".into(),
                 series: finals(x),
                 hline: floor.clone(),
+                y_is_error: true,
             },
         )?);
     }
@@ -365,6 +470,7 @@ pub fn scaling_plots(dir: &Path, runs: &[RunResult]) -> Result<Vec<PathBuf>> {
                 y_label: "wall time of steps (s)".into(),
                 series: mk(&|p| p.1),
                 hline: None,
+                y_is_error: false,
             },
         )?,
         write_plot(
@@ -375,6 +481,7 @@ pub fn scaling_plots(dir: &Path, runs: &[RunResult]) -> Result<Vec<PathBuf>> {
                 y_label: "peak resident memory (bytes)".into(),
                 series: mk(&|p| p.2),
                 hline: None,
+                y_is_error: false,
             },
         )?,
     ])
@@ -390,5 +497,28 @@ mod tests {
             .collect();
         assert!((super::loglog_slope(&pts).expect("slope") - 1.5).abs() < 1e-12);
         assert!(super::loglog_slope(&[(1.0, 2.0)]).is_none());
+    }
+
+    #[test]
+    fn tick_labels_are_distinct_and_errors_read_as_percentages() {
+        for (lo, hi, m) in [
+            (0.004, 0.2, &[1.0, 3.0][..]),
+            (0.08, 0.12, &[1.0, 3.0][..]),
+            (1e-3, 1e4, &[1.0, 2.0, 5.0][..]),
+            (0.05, 7.0, &[1.0, 2.0, 5.0][..]),
+        ] {
+            let t = super::log_ticks(lo, hi, m);
+            let labels: Vec<String> = t.iter().map(|&v| super::fmt_number(v)).collect();
+            let mut unique = labels.clone();
+            unique.dedup();
+            assert_eq!(unique, labels, "{lo}..{hi}");
+            assert!(t.iter().all(|&v| v >= lo && v <= hi));
+        }
+        let t = super::log_ticks(0.004, 0.2, &[1.0, 3.0]);
+        let p: Vec<String> = t.iter().map(|&v| super::fmt_percent(v)).collect();
+        assert_eq!(p, ["1%", "3%", "10%"]);
+        assert_eq!(super::fmt_number(0.03), "0.03");
+        assert_eq!(super::fmt_number(2e6), "2e6");
+        assert_eq!(super::fmt_percent(0.0065), "0.65%");
     }
 }

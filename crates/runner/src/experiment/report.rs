@@ -1,6 +1,14 @@
 //! `report.md` (per scene: the reference and its noise floor, then per method the best time to reach 10%, 3% and
-//! 1% relative L1 error, the best final error and the run outcomes, with the figures embedded) and `meta.json`
-//! (the config as run, git commit, versions, threads, machine, start and end times).
+//! 1% relative L1 error at the experiment's points, the best final error with its max error and image error, the
+//! run outcomes, where path tracing and the finite-element methods cross, and the figures) and `meta.json` (the
+//! config as run, git commit, versions, threads, machine, start and end times).
+//!
+//! Time is time to answer: the solver's steps plus one answering pass at the points (a final gather's rays
+//! and time; path tracing does all its work in its steps). The crossover: at error level e, path tracing's
+//! cost is per point, t_pt(N) = a N with a = its time to e over the experiment's N points; a finite-element
+//! method's is t_fe(N) = s + g N with s its solving time to e and g its answering time per point. They are
+//! equal at N* = s / (a − g) (when a > g; otherwise path tracing is cheaper at every N); below N* path tracing
+//! is cheaper, above it the finite-element solution.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -14,20 +22,97 @@ use crate::output::atomic::write_bytes;
 /// Error levels of the report's table.
 pub const THRESHOLDS: [f64; 3] = [0.10, 0.03, 0.01];
 
-/// Earliest wall time at which any run of (scene, label) reached relative L1 ≤ `thr`.
-pub fn time_to(trace: &[TraceRow], scene: &str, label: &str, thr: f64) -> Option<f64> {
+/// The trace row at which a run of (scene, label) first answered with relative L1 ≤ `thr` at the least time to
+/// answer (solving plus one answering pass).
+pub fn row_to<'a>(
+    trace: &'a [TraceRow],
+    scene: &str,
+    label: &str,
+    thr: f64,
+) -> Option<&'a TraceRow> {
     trace
         .iter()
         .filter(|t| t.scene == scene && t.label == label && t.l1 <= thr)
-        .map(|t| t.wall_s)
-        .min_by(f64::total_cmp)
+        .min_by(|a, b| (a.wall_s + a.answer_s).total_cmp(&(b.wall_s + b.answer_s)))
+}
+
+/// Earliest time to answer (steps plus one answering pass) at which any run of (scene, label) reached relative
+/// L1 ≤ `thr`.
+pub fn time_to(trace: &[TraceRow], scene: &str, label: &str, thr: f64) -> Option<f64> {
+    row_to(trace, scene, label, thr).map(|t| t.wall_s + t.answer_s)
+}
+
+/// Where path tracing's cost, a per point, equals a finite-element method's, s + g per point: N* = s/(a − g).
+/// `None` when a ≤ g (path tracing is cheaper at any number of points).
+pub fn crossover(a: f64, s: f64, g: f64) -> Option<f64> {
+    (a > g && s >= 0.0).then(|| s / (a - g))
+}
+
+/// One line of the crossover table: at error level `level`, path tracing's time per point, the best
+/// finite-element method at the experiment's N points (label, solving time, answering time per point) and N*.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Crossing {
+    /// Error level.
+    pub level: f64,
+    /// Path tracing's time per point to reach it.
+    pub per_point: f64,
+    /// The finite-element method (label) answering fastest at the experiment's point count.
+    pub best: String,
+    /// Its solving time.
+    pub solve: f64,
+    /// Its answering time per point.
+    pub answer_per_point: f64,
+    /// The crossover point count (`None`: path tracing is cheaper at any count).
+    pub points: Option<f64>,
+}
+
+/// The crossovers of a scene at each of [`THRESHOLDS`] reached by path tracing and by some other method.
+/// Methods are path tracing if their label is `pathtrace_label`'s; `n` is the experiment's point count.
+pub fn crossings(
+    trace: &[TraceRow],
+    scene: &str,
+    pathtrace_labels: &[&str],
+    other_labels: &[&str],
+    n: f64,
+) -> Vec<Crossing> {
+    let mut out = Vec::new();
+    if !(n > 0.0) {
+        return out;
+    }
+    for &level in &THRESHOLDS {
+        let Some(pt) = pathtrace_labels
+            .iter()
+            .filter_map(|l| time_to(trace, scene, l, level))
+            .min_by(f64::total_cmp)
+        else {
+            continue;
+        };
+        let best = other_labels
+            .iter()
+            .filter_map(|l| row_to(trace, scene, l, level).map(|r| (l, r)))
+            .min_by(|a, b| (a.1.wall_s + a.1.answer_s).total_cmp(&(b.1.wall_s + b.1.answer_s)));
+        let Some((label, row)) = best else { continue };
+        let a = pt / n;
+        let g = row.answer_s / n;
+        out.push(Crossing {
+            level,
+            per_point: a,
+            best: label.to_string(),
+            solve: row.wall_s,
+            answer_per_point: g,
+            points: crossover(a, row.wall_s, g),
+        });
+    }
+    out
 }
 
 fn fmt_time(t: Option<f64>) -> String {
     t.map_or_else(
         || "—".to_string(),
         |s| {
-            if s < 1.0 {
+            if s < 1e-3 {
+                format!("{:.1} µs", s * 1e6)
+            } else if s < 1.0 {
                 format!("{:.0} ms", s * 1e3)
             } else {
                 format!("{s:.2} s")
@@ -43,6 +128,7 @@ pub fn markdown(
     runs: &[RunResult],
     trace: &[TraceRow],
     figures: &BTreeMap<String, Vec<String>>,
+    image_errors: &BTreeMap<(String, String), f64>,
 ) -> String {
     let mut s = format!("# {name}\n\n{description}\n\n");
     let mut scenes: Vec<&str> = Vec::new();
@@ -55,22 +141,28 @@ pub fn markdown(
         let rs: Vec<&RunResult> = runs.iter().filter(|r| r.scene == scene).collect();
         let floor = rs.iter().map(|r| r.floor_l1).fold(0.0, f64::max);
         let kind = rs.first().map_or("", |r| r.reference.as_str());
+        let n = rs.iter().map(|r| r.points).max().unwrap_or(0);
         let _ = writeln!(
             s,
-            "## {scene}\n\nReference: {kind}; noise floor (relative L1) {floor:.2e}.\n"
+            "## {scene}\n\nReference: {kind}; noise floor (relative L1) {floor:.2e}. Times are to answer at the \
+             {n} evaluation points: the solver's steps plus one answering pass (a final gather's cost). The max \
+             error is relative to max(|reference|, {:.0}% of the scene's area-mean reference radiosity) at each \
+             point. The image error is the mean relative difference of the best run's image from the path-traced \
+             reference image (path tracing's image is rendered at the paths per point it reached).\n",
+            radlab_scene::error_metric::MAX_ERROR_FLOOR * 100.0
         );
         let _ = writeln!(
             s,
-            "| method | runs | time to 10% | time to 3% | time to 1% | best final L1 | its time | outcomes |"
+            "| method | runs | time to 10% | time to 3% | time to 1% | best final L1 | its max | its image error | its time | outcomes |"
         );
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
         let mut labels: Vec<&str> = Vec::new();
         for r in &rs {
             if !labels.contains(&r.label.as_str()) {
                 labels.push(&r.label);
             }
         }
-        for label in labels {
+        for &label in &labels {
             let mine: Vec<&&RunResult> = rs.iter().filter(|r| r.label == label).collect();
             let best = mine
                 .iter()
@@ -85,17 +177,59 @@ pub fn markdown(
                 .iter()
                 .map(|&t| fmt_time(time_to(trace, scene, label, t)))
                 .collect();
+            let image = image_errors
+                .get(&(scene.to_string(), label.to_string()))
+                .map_or("—".into(), |e| format!("{:.1}%", e * 100.0));
             let _ = writeln!(
                 s,
-                "| {label} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {label} | {} | {} | {} | {} | {} | {} | {image} | {} | {} |",
                 mine.len(),
                 times[0],
                 times[1],
                 times[2],
                 best.map_or("—".into(), |b| format!("{:.2e}", b.l1)),
-                fmt_time(best.map(|b| b.wall_s)),
+                best.map_or("—".into(), |b| format!("{:.0}%", b.max * 100.0)),
+                fmt_time(best.map(|b| b.wall_s + b.answer_s)),
                 outcomes.join(", ")
             );
+        }
+        let pt: Vec<&str> = labels
+            .iter()
+            .copied()
+            .filter(|l| {
+                rs.iter()
+                    .any(|r| r.label == *l && r.method == crate::pathtraced::NAME)
+            })
+            .collect();
+        let fe: Vec<&str> = labels.iter().copied().filter(|l| !pt.contains(l)).collect();
+        let cross = crossings(trace, scene, &pt, &fe, n as f64);
+        if !cross.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nWhere path tracing and the finite-element methods cross: path tracing pays per point, a \
+                 finite-element solution once for the scene (plus its answering per point). Below the crossover \
+                 point count path tracing answers sooner; above it the finite-element method does.\n"
+            );
+            let _ = writeln!(
+                s,
+                "| error | path tracing per point | fastest other method at {n} points | its solve | its answer per point | crossover points |"
+            );
+            let _ = writeln!(s, "|---|---|---|---|---|---|");
+            for c in &cross {
+                let _ = writeln!(
+                    s,
+                    "| {:.0}% | {} | {} | {} | {} | {} |",
+                    c.level * 100.0,
+                    fmt_time(Some(c.per_point)),
+                    c.best,
+                    fmt_time(Some(c.solve)),
+                    fmt_time(Some(c.answer_per_point)),
+                    c.points
+                        .map_or("none (path tracing cheaper at any count)".into(), |p| {
+                            format!("{p:.0}")
+                        })
+                );
+            }
         }
         let failed: Vec<&&RunResult> = rs.iter().filter(|r| !r.message.is_empty()).collect();
         if !failed.is_empty() {
@@ -187,4 +321,48 @@ pub fn environment() -> serde_json::Value {
         "arch": std::env::consts::ARCH,
         "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(label: &str, wall: f64, answer: f64, l1: f64) -> TraceRow {
+        TraceRow {
+            id: label.into(),
+            scene: "s".into(),
+            label: label.into(),
+            wall_s: wall,
+            answer_s: answer,
+            l1,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn crossover_on_a_synthetic_table() {
+        // At 100 points: path tracing reaches 10% in 0.5 s and 3% in 4 s (5 and 40 ms per point). Matrix
+        // solves to 10% in 0.9 s and answers in 0.1 s (1 ms per point), to 3% in 1.9 s; a constant-element
+        // method reaches 10% only, in 3 s. Crossovers: 10%: N* = 0.9/(0.005 − 0.001) = 225; 3%:
+        // 1.9/(0.04 − 0.001) = 48.7; 1%: nobody reaches it.
+        let trace = vec![
+            row("pathtrace", 0.2, 0.0, 0.2),
+            row("pathtrace", 0.5, 0.0, 0.09),
+            row("pathtrace", 4.0, 0.0, 0.029),
+            row("matrix", 0.9, 0.1, 0.08),
+            row("matrix", 1.9, 0.1, 0.02),
+            row("constant", 3.0, 0.0, 0.1),
+        ];
+        let c = crossings(&trace, "s", &["pathtrace"], &["matrix", "constant"], 100.0);
+        assert_eq!(c.len(), 2, "{c:?}");
+        assert_eq!(c[0].best, "matrix");
+        assert!((c[0].points.expect("10%") - 225.0).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c[1].points.expect("3%") - 1.9 / (0.04 - 0.001)).abs() < 1e-9,
+            "{c:?}"
+        );
+        // Path tracing no costlier per point than answering: no crossover.
+        assert_eq!(crossover(0.001, 5.0, 0.002), None);
+        assert_eq!(crossover(0.01, 0.0, 0.0), Some(0.0));
+    }
 }

@@ -1,14 +1,20 @@
-//! The error metric every method is measured by (ARCHITECTURE.md, "Error"): over the evaluation points x_i
-//! with area weights w_i and RGB channels c,
+//! The error metric every method, test, bench and report is measured by: over the evaluation points x_i with
+//! area weights w_i and RGB channels c,
 //!
 //! L1 = Σ_i w_i Σ_c |B_ic − R_ic| / Σ_i w_i Σ_c |R_ic|,   L2 = √(Σ_i w_i Σ_c (B_ic − R_ic)²) / √(Σ_i w_i Σ_c R_ic²),
-//! max = max_{i,c} |B_ic − R_ic| / max(|R_ic|, 0.02 · R̄),
+//! max = max_{i,c} |B_ic − R_ic| / max(|R_ic|, f · R̄),   R̄ = Σ_i w_i Σ_c |R_ic| / (3 Σ_i w_i),
 //!
-//! relative errors with a floor of 2% of the mean reference value in the max (as Mitsuba's tests do), so black
-//! points do not dominate. The noise floor is the same metric of the reference's own error: with standard
-//! errors s_ic, E|N(0, s)| = s √(2/π) for L1 and s for L2; the max floor is 3 s / max(|R|, 0.02 R̄).
+//! relative errors with a floor in the max of f = [`MAX_ERROR_FLOOR`] = 2% of the area-mean reference radiosity
+//! (the floor Mitsuba 3's tests use for relative errors, `|a − r| / max(|r|, 2e-2)`, made relative to the
+//! scene's light level), so a point in deep shadow does not report thousands of per cent for an absolute error
+//! that is small on the scene's scale. The noise floor is the same metric of the reference's own error: with
+//! standard errors s_ic, E|N(0, s)| = s √(2/π) for L1 and s for L2; the max floor is 3 s / max(|R|, f R̄).
 
-use radlab_scene::Rgb;
+use crate::Rgb;
+
+/// The floor of the max error, as a fraction of the area-mean reference radiosity: a point's relative error
+/// is |B − R| / max(|R|, `MAX_ERROR_FLOOR` · R̄).
+pub const MAX_ERROR_FLOOR: f64 = 0.02;
 
 /// Relative errors.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -40,7 +46,7 @@ fn mean_abs(reference: &[Rgb], weights: &[f64]) -> (f64, f64, f64) {
 pub fn errors(values: &[Rgb], reference: &[Rgb], weights: &[f64]) -> Errors {
     debug_assert_eq!(values.len(), reference.len());
     let (r1, r2, mean) = mean_abs(reference, weights);
-    let floor = (0.02 * mean).max(f64::MIN_POSITIVE);
+    let floor = (MAX_ERROR_FLOOR * mean).max(f64::MIN_POSITIVE);
     let mut e1 = 0.0;
     let mut e2 = 0.0;
     let mut emax: f64 = 0.0;
@@ -80,7 +86,7 @@ pub fn errors(values: &[Rgb], reference: &[Rgb], weights: &[f64]) -> Errors {
 /// The noise floor of a reference with standard errors `std_error`.
 pub fn noise_floor(reference: &[Rgb], std_error: &[Rgb], weights: &[f64]) -> Errors {
     let (r1, r2, mean) = mean_abs(reference, weights);
-    let floor = (0.02 * mean).max(f64::MIN_POSITIVE);
+    let floor = (MAX_ERROR_FLOOR * mean).max(f64::MIN_POSITIVE);
     let s1: f64 = std_error
         .iter()
         .zip(weights)
@@ -107,6 +113,33 @@ pub fn noise_floor(reference: &[Rgb], std_error: &[Rgb], weights: &[f64]) -> Err
         l2: rel(s2.sqrt(), r2.sqrt()),
         max: smax,
     }
+}
+
+/// Errors of `solution` against `reference` at evaluation points (their weights are the area weights).
+pub fn solution_errors(
+    solution: &dyn crate::Solution,
+    points: &[crate::EvalPoint],
+    reference: &[Rgb],
+) -> Errors {
+    let values: Vec<Rgb> = points
+        .iter()
+        .map(|p| solution.radiosity_at(p.face, p.point))
+        .collect();
+    let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
+    errors(&values, reference, &weights)
+}
+
+/// Errors of solution `a` against solution `b` (taken as the reference) at `points`.
+pub fn difference(
+    a: &dyn crate::Solution,
+    b: &dyn crate::Solution,
+    points: &[crate::EvalPoint],
+) -> Errors {
+    let reference: Vec<Rgb> = points
+        .iter()
+        .map(|p| b.radiosity_at(p.face, p.point))
+        .collect();
+    solution_errors(a, points, &reference)
 }
 
 #[cfg(test)]
@@ -143,11 +176,11 @@ mod tests {
         let r = vec![Rgb::ONE; n];
         let s = vec![Rgb::splat(0.01); n];
         let w = vec![1.0; n];
-        let mut rng = radlab_scene::sampling::rng(3, 0);
-        let normal = |rng: &mut radlab_scene::sampling::Rng| {
+        let mut rng = crate::sampling::rng(3, 0);
+        let normal = |rng: &mut crate::sampling::Rng| {
             let (u1, u2) = (
-                radlab_scene::sampling::uniform(rng).max(1e-300),
-                radlab_scene::sampling::uniform(rng),
+                crate::sampling::uniform(rng).max(1e-300),
+                crate::sampling::uniform(rng),
             );
             (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
         };
