@@ -1,39 +1,52 @@
 //! The output layer, for any node kind whose hierarchy reaches the input faces: locating a surface point in
 //! the hierarchy (from the node that is the whole face down through its quadtree, in the face's parameter
-//! space) and answering radiosity there, constant per leaf or vertex-interpolated ([`crate::gouraud`]).
-//! Solvers built on the engine (patches, volume clusters) share it.
+//! space) and answering radiosity there: constant per leaf, vertex-interpolated ([`crate::gouraud`]), or by a
+//! final gather from every leaf (B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j; Lischinski, Tampieri & Greenberg
+//! 1993, through radlab-scene's shared [`Reconstructor`]). Solvers built on the engine (patches, volume
+//! clusters) share it.
 
 use glam::DVec3;
-use radlab_scene::{FaceId, Rgb};
+use radlab_scene::{
+    Accel, FaceId, Reconstruction, Reconstructor, Rgb, Scene, gouraud::ElementValue,
+};
 use rayon::prelude::*;
 
 use crate::gouraud::{face_corner_values, interpolate};
 use crate::hierarchy::Engine;
 use crate::locate::{insideness, param_coords, param_corners};
 use crate::node::NodeKind;
-use crate::params::Interpolation;
 use crate::transport::Transport;
 
 /// Radiosity at surface points from an engine's solution.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug)]
 pub struct SurfaceOutput {
-    interpolation: Interpolation,
+    reconstruction: Reconstruction,
     /// Corner values per node id (Gouraud only; empty otherwise).
     corner_values: Vec<[Rgb; 4]>,
+    /// The final gather's data, rebuilt at the first query after each update.
+    gather: Reconstructor,
 }
 
 impl SurfaceOutput {
-    /// Output with the given reconstruction.
-    pub fn new(interpolation: Interpolation) -> Self {
+    /// Output with the given reconstruction; a final gather draws its rays from `seed`.
+    pub fn new(reconstruction: Reconstruction, seed: u64) -> Self {
         Self {
-            interpolation,
+            reconstruction,
             corner_values: Vec::new(),
+            gather: Reconstructor::new(reconstruction, seed),
         }
+    }
+
+    /// Rays and kernel evaluations the final gather has spent answering so far (charged to answering, not
+    /// to the steps).
+    pub fn gather_work(&self) -> (u64, u64) {
+        self.gather.gather_work()
     }
 
     /// Recomputes what the reconstruction needs from the engine's current solution.
     pub fn update<N: NodeKind, T: Transport<N>>(&mut self, engine: &Engine<N, T>, faces: usize) {
-        if self.interpolation != Interpolation::Gouraud {
+        self.gather.invalidate();
+        if self.reconstruction != Reconstruction::Gouraud {
             return;
         }
         let per_face: Vec<Vec<(u32, [Rgb; 4])>> = (0..faces)
@@ -52,20 +65,34 @@ impl SurfaceOutput {
 
     /// Bytes held.
     pub fn bytes(&self) -> u64 {
-        (self.corner_values.capacity() * size_of::<[Rgb; 4]>()) as u64
+        (self.corner_values.capacity() * size_of::<[Rgb; 4]>() + self.gather.bytes()) as u64
     }
 
-    /// Radiosity of `face` at `point`: zero for a face the hierarchy does not reach.
+    /// Radiosity of `face` at `point` (of `scene`, rays through `accel` for a final gather): zero for a face
+    /// the hierarchy does not reach.
     pub fn radiosity_at<N: NodeKind, T: Transport<N>>(
         &self,
         engine: &Engine<N, T>,
+        scene: &Scene,
+        accel: &Accel,
         face: FaceId,
         point: DVec3,
     ) -> Rgb {
         let Some(i) = locate(engine, face, point) else {
             return Rgb::ZERO;
         };
-        if self.interpolation == Interpolation::Gouraud
+        if self.reconstruction == Reconstruction::FinalGather {
+            return self.gather.radiosity_at(
+                scene,
+                accel,
+                face,
+                point,
+                || engine.radiosity()[i as usize],
+                || None,
+                || leaf_elements(engine),
+            );
+        }
+        if self.reconstruction == Reconstruction::Gouraud
             && let (Some(node), Some(root)) = (
                 engine.nodes()[i as usize].patch(),
                 engine
@@ -112,4 +139,19 @@ pub fn locate<N: NodeKind, T: Transport<N>>(
         i = best.1;
     }
     Some(i)
+}
+
+/// Every leaf that is a quadtree element, as the shared reconstructions see it.
+fn leaf_elements<N: NodeKind, T: Transport<N>>(engine: &Engine<N, T>) -> Vec<ElementValue> {
+    (0..engine.nodes().len() as u32)
+        .filter(|&i| engine.is_leaf(i))
+        .filter_map(|i| {
+            let p = engine.nodes()[i as usize].patch()?;
+            Some(ElementValue {
+                face: p.face,
+                polygon: p.polygon,
+                radiosity: engine.radiosity()[i as usize],
+            })
+        })
+        .collect()
 }

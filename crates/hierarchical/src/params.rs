@@ -4,7 +4,7 @@
 //! (serde kebab-case), every field has a documented default, and [`HierarchicalParams::coarse`] and
 //! [`HierarchicalParams::reference`] are named presets.
 
-use radlab_scene::{MethodParams, SolveError, form_factor::VisibilitySampling};
+use radlab_scene::{MethodParams, Reconstruction, SolveError, form_factor::VisibilitySampling};
 use serde::{Deserialize, Serialize};
 
 /// The default minimum element size as a fraction of the scene's bounding-box diagonal.
@@ -75,19 +75,6 @@ pub enum ErrorNorm {
     Power,
 }
 
-/// How [`radlab_scene::Solution::radiosity_at`] reconstructs radiosity inside an input face.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Interpolation {
-    /// Constant per leaf element (the solution as computed).
-    #[default]
-    Constant,
-    /// Vertex-interpolated (Gouraud): each leaf corner takes the area-weighted mean of the leaves of the same
-    /// face that meet there; T-vertices take the value interpolated along the coarser edge they lie on, so
-    /// the result is continuous within each input face.
-    Gouraud,
-}
-
 /// Parameters of [`crate::HierarchicalSolver`]. Every field has a default; see [`MethodParams::docs`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -123,8 +110,10 @@ pub struct HierarchicalParams {
     pub max_steps: u64,
     /// How leaves gather from the links above them. Default [`Gather::Leaf`].
     pub gather: Gather,
-    /// Output reconstruction. Default [`Interpolation::Constant`].
-    pub interpolation: Interpolation,
+    /// Point answers: `constant` per leaf, `gouraud` (vertex-interpolated over each face's quadtree, T-vertices
+    /// resolved) or `final-gather` (one more gather from every leaf with exact point-to-polygon factors and
+    /// rays). Default [`Reconstruction::Constant`].
+    pub reconstruction: Reconstruction,
     /// Refuse to hold more links and elements than this many MiB. Default 4096.
     pub memory_budget_mib: f64,
 }
@@ -146,7 +135,7 @@ impl HierarchicalParams {
             tolerance: 1e-4,
             max_steps: 100_000,
             gather: Gather::Leaf,
-            interpolation: Interpolation::Constant,
+            reconstruction: Reconstruction::Constant,
             memory_budget_mib: 4096.0,
         }
     }
@@ -240,8 +229,9 @@ impl MethodParams for HierarchicalParams {
                 "leaf (default: kernel at each leaf for every link above it) | link (classic: per-link mean, pushed)",
             ),
             (
-                "interpolation",
-                "constant (default) | gouraud: output per leaf or vertex-interpolated",
+                "reconstruction",
+                "point answers: constant (default) | gouraud (vertex-interpolated) | final-gather (one more gather \
+                 from every leaf, exact point-to-polygon factors and rays; its cost is charged when answering)",
             ),
             (
                 "memory_budget_mib",
@@ -327,7 +317,7 @@ mod tests {
             ("oracle", "variation"),
             ("schedule", "two-stage"),
             ("min_element_size", "0.5"),
-            ("interpolation", "gouraud"),
+            ("reconstruction", "gouraud"),
             ("visibility", "centre"),
         ]
         .map(|(k, v)| (k.to_string(), v.to_string()));
@@ -335,7 +325,7 @@ mod tests {
         assert_eq!(p.oracle, Oracle::Variation);
         assert_eq!(p.schedule, Schedule::TwoStage);
         assert_eq!(p.min_element_size, Some(0.5));
-        assert_eq!(p.interpolation, Interpolation::Gouraud);
+        assert_eq!(p.reconstruction, Reconstruction::Gouraud);
         assert_eq!(p.visibility, VisibilitySampling::Centre);
     }
 

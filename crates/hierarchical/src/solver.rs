@@ -51,7 +51,7 @@ impl<'a> HierarchicalSolver<'a> {
             seed,
             params.gather,
         );
-        let output = SurfaceOutput::new(params.interpolation);
+        let output = SurfaceOutput::new(params.reconstruction, seed);
         let engine = Engine::new(roots, kernel, params, min_size)?;
         Ok(Self {
             scene,
@@ -92,7 +92,8 @@ impl<'a> HierarchicalSolver<'a> {
 
 impl Solution for HierarchicalSolver<'_> {
     fn radiosity_at(&self, face: FaceId, point: glam::DVec3) -> Rgb {
-        self.output.radiosity_at(&self.engine, face, point)
+        self.output
+            .radiosity_at(&self.engine, self.scene, self.accel, face, point)
     }
 }
 

@@ -3,12 +3,10 @@
 //! the same scene, and invariances (scale, thread count, schedule).
 
 use glam::{DVec3, dvec3};
-use radlab_hierarchical::{
-    Gather, HierarchicalParams, HierarchicalSolver, Interpolation, Oracle, Schedule,
-};
+use radlab_hierarchical::{Gather, HierarchicalParams, HierarchicalSolver, Oracle, Schedule};
 use radlab_scene::{
-    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, Solver, Step,
-    evaluation_points,
+    Accel, Material, MethodParams, Reconstruction, Rgb, Scene, SceneBuilder, Solution, Solver,
+    Step, evaluation_points,
 };
 
 fn solve<'a>(scene: &'a Scene, accel: &'a Accel, p: HierarchicalParams) -> HierarchicalSolver<'a> {
@@ -83,13 +81,14 @@ fn furnace_cube_and_sphere_give_e_over_one_minus_rho() {
                 .expect("builtin");
             let accel = Accel::new(&scene);
             let exact = 2.0 / (1.0 - rho);
-            for (oracle, interpolation) in [
-                (Oracle::F, Interpolation::Constant),
-                (Oracle::Variation, Interpolation::Gouraud),
+            for (oracle, reconstruction) in [
+                (Oracle::F, Reconstruction::Constant),
+                (Oracle::Variation, Reconstruction::Gouraud),
+                (Oracle::F, Reconstruction::FinalGather),
             ] {
                 let p = HierarchicalParams {
                     oracle,
-                    interpolation,
+                    reconstruction,
                     epsilon: 0.01,
                     min_element_size: Some(scene.diagonal() / 30.0),
                     visibility: radlab_scene::form_factor::VisibilitySampling::Jittered2x2,
@@ -114,7 +113,7 @@ fn furnace_cube_and_sphere_give_e_over_one_minus_rho() {
                     let rel = (b - Rgb::splat(exact)).abs().max_element() / exact;
                     assert!(
                         rel < 0.01,
-                        "{spec} rho={rho} {interpolation:?}: B={b} vs {exact}"
+                        "{spec} rho={rho} {reconstruction:?}: B={b} vs {exact}"
                     );
                 }
             }
@@ -187,8 +186,11 @@ fn error_against_matrix_falls_as_epsilon_shrinks() {
     let scene = shadow_box();
     let accel = Accel::new(&scene);
     let h = 1.0 / 8.0;
+    // Constant elements on both sides: the comparison is of the two discrete solutions, not of a
+    // reconstruction.
     let mp = radlab_matrix::MatrixParams {
         element_size: Some(h),
+        reconstruction: radlab_scene::Reconstruction::Constant,
         ..radlab_matrix::MatrixParams::default()
     };
     let mut m = radlab_matrix::MatrixSolver::new(&scene, &accel, mp, 5).expect("matrix");
@@ -419,7 +421,7 @@ fn radiosity_at_finds_each_leaf_and_gouraud_is_continuous() {
         &scene,
         &accel,
         HierarchicalParams {
-            interpolation: Interpolation::Gouraud,
+            reconstruction: Reconstruction::Gouraud,
             ..HierarchicalParams::coarse()
         },
     );

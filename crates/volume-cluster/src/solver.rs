@@ -77,7 +77,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         }
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
         let transport = ClusterTransport::new(patches, accel, p.visibility, seed);
-        let output = SurfaceOutput::new(p.interpolation);
+        let output = SurfaceOutput::new(p.reconstruction, seed);
         let n_roots = roots.len() as u32;
         let mut engine = Engine::new(roots, transport, p, min_size)?;
         engine.expand(|n| matches!(n, ClusterNode::Cluster(_)))?;
@@ -155,7 +155,8 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
 
 impl<M: TransferMode> Solution for ClusterSolver<'_, M> {
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        self.output.radiosity_at(&self.engine, face, point)
+        self.output
+            .radiosity_at(&self.engine, self.scene, self.accel, face, point)
     }
 }
 

@@ -269,8 +269,8 @@ fn concentric_spheres_are_a_furnace_at_moderate_albedo() {
     // B = E/(1 − ρ) everywhere (Christensen 1995 §8.3). At ρ = 0.5 α and directional links meet it within 1%
     // on the area mean; isotropic clusters lose energy (a cluster of the sphere seen face-on is a quarter of
     // its true projected area), as documented. Near ρ = 1 every transfer's point-approximation defect in the
-    // form-factor row sums (about 0.6% here) is multiplied by 1/(1 − ρ): see the crate docs and the figures
-    // in docs/ for ρ = 0.9 … 0.999.
+    // form-factor row sums (about 0.6% here) is multiplied by 1/(1 − ρ): the crate documentation gives the
+    // measured errors at ρ = 0.9 … 0.999.
     let scene = builtin("concentric-spheres?faces=600&reflectance=0.5").expect("scene");
     let accel = Accel::new(&scene);
     let mut means = Vec::new();
@@ -287,7 +287,7 @@ fn concentric_spheres_are_a_furnace_at_moderate_albedo() {
         match t {
             Transfer::Alpha | Transfer::Directional => {
                 assert!(err.abs() < 0.01, "{t:?}: mean error {err}");
-                // A furnace's imbalance is its mean error over (1 − ρ)/ρ… both measure the row-sum defect.
+                // Both the mean error and the imbalance measure the same row-sum defect.
                 assert!(imbalance.abs() < 0.02, "{t:?}: imbalance {imbalance}");
             }
             Transfer::Isotropic => assert!(err < -0.01, "isotropic no longer biased low? {err}"),

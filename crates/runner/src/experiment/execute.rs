@@ -78,6 +78,10 @@ pub struct RunResult {
     pub steps: u64,
     /// Wall seconds in steps.
     pub wall_s: f64,
+    /// Wall seconds building the solver before its first step (hierarchies built in advance: volume and face
+    /// clusters), reported apart from the steps.
+    #[serde(default)]
+    pub setup_s: f64,
     /// CPU seconds in steps (all threads).
     pub cpu_s: f64,
     /// Evaluation points the run was measured (and, for path tracing, traced) at.
@@ -276,7 +280,9 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let (reference, _) = reference::read_cache(&job.reference_file, points.len())?;
     let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
     let method = crate::methods::find(&spec.method)?;
+    let setup = std::time::Instant::now();
     let mut solver = (method.build)(&scene, &accel, spec.params.clone(), spec.seed, &points)?;
+    result.setup_s = setup.elapsed().as_secs_f64();
     let limits = Limits {
         max_steps: job.limits.max_steps,
         time_limit: Duration::from_secs_f64(job.limits.time_limit),
