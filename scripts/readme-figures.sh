@@ -9,4 +9,4 @@ out=results/headline/quickstart
 mkdir -p "$out"
 cp results/quickstart/figures/frontier-cornell.png results/quickstart/figures/convergence-cornell.png \
    results/quickstart/images/contact-sheet-cornell.png results/quickstart/runs.csv "$out"/
-echo "updated $out; the README's table is transcribed from $out/runs.csv"
+echo "updated $out; print the README table with: python3 scripts/readme-table.py"
