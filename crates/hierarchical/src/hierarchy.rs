@@ -247,6 +247,19 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.form_factors
     }
 
+    /// The solver statistics of this engine, with the rays its owner counted and the bytes it holds besides.
+    pub fn stats(&self, rays: u64, extra_bytes: u64) -> radlab_scene::Stats {
+        radlab_scene::Stats {
+            steps: self.steps(),
+            elements: self.leaf_count() as u64,
+            links: self.link_count() as u64,
+            form_factors: self.form_factors(),
+            rays,
+            bytes: self.bytes() + extra_bytes,
+            residual: self.residual(),
+        }
+    }
+
     /// The latest estimate of the solution's remaining relative error, once a solve pass has run.
     pub fn residual(&self) -> Option<f64> {
         self.residual

@@ -112,15 +112,6 @@ impl Solver for HierarchicalSolver<'_> {
     }
 
     fn stats(&self) -> Stats {
-        let e = &self.engine;
-        Stats {
-            steps: e.steps(),
-            elements: e.leaf_count() as u64,
-            links: e.link_count() as u64,
-            form_factors: e.form_factors(),
-            rays: self.rays,
-            bytes: e.bytes() + self.output.bytes(),
-            residual: e.residual(),
-        }
+        self.engine.stats(self.rays, self.output.bytes())
     }
 }
