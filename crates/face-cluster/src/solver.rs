@@ -154,9 +154,20 @@ impl<'a> FaceClusterSolver<'a> {
             ));
         }
         let roots = tree.roots();
+        let scene_area: f64 = roots.clone().map(|r| tree.node(r).area).sum();
         let ctx = Arc::new(FaceContext::new(tree, scene));
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
-        let transport = VectorTransport::new(patches, accel, p.visibility);
+        let transport = VectorTransport::new(
+            patches,
+            accel,
+            p.visibility,
+            p.epsilon,
+            if p.error_norm == ErrorNorm::Power {
+                scene_area
+            } else {
+                0.0
+            },
+        );
         let output = SurfaceOutput::new(p.interpolation);
         let nodes: Vec<FaceNode<'a>> = roots
             .clone()

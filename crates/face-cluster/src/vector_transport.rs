@@ -16,7 +16,10 @@
 //! angle between the cone axis and ±d and σ the spread of the link's directions (σ = asin((ρ_R + ρ_S)/|c_R −
 //! c_S|) for bounding spheres of radii ρ_R, ρ_S), a link is made when α + θ + σ ≤ 90° at both ends, dropped
 //! when α − θ − σ ≥ 90° at either (nothing faces the other), and otherwise refused as overlapping so the
-//! refinement splits it. Pairs whose bounds overlap get a link that transfers nothing, with the form-factor
+//! refinement splits it — unless its geometric estimate max(F_RS, F_SR) ρ_R (× A_R/A_scene with the power
+//! norm) is already below the final ε, which bounds the error of keeping it. Without that exception every
+//! pair whose cones straddle the link direction splits down to the input faces whatever light it carries
+//! (measured: 316,000 links for 600 faces of concentric spheres at ε = 1e-3). Pairs whose bounds overlap get a link that transfers nothing, with the form-factor
 //! bounds F_RS ≤ min(1, A_S/A_R) (reciprocity), so the oracle splits them until the power they could carry is
 //! below ε. A node whose two children face each other (each child's centroid in front of the other's mean
 //! plane: a concave node) has a self-link; it carries f B̄ along the node's cone axis with
@@ -44,15 +47,29 @@ pub struct VectorTransport<'a> {
     patches: PatchKernel<'a>,
     accel: &'a Accel,
     visibility: VisibilitySampling,
+    /// Links whose vector form fails are refused while max(F_RS, F_SR) ρ_R × A_R/`norm_area` exceeds this.
+    refuse_above: f64,
+    /// A_R's divisor in the refusal estimate: the scene's area (power norm), or 0 for the radiosity norm.
+    norm_area: f64,
 }
 
 impl<'a> VectorTransport<'a> {
     /// A transport whose patch pairs use `patches` and whose vector links cast up to `visibility` rays.
-    pub fn new(patches: PatchKernel<'a>, accel: &'a Accel, visibility: VisibilitySampling) -> Self {
+    /// Links whose vector form fails are refused (split) while their geometric estimate max(F_RS, F_SR) ρ_R,
+    /// times A_R / `scene_area` when `scene_area` > 0 (the power norm), exceeds `epsilon`.
+    pub fn new(
+        patches: PatchKernel<'a>,
+        accel: &'a Accel,
+        visibility: VisibilitySampling,
+        epsilon: f64,
+        scene_area: f64,
+    ) -> Self {
         Self {
             patches,
             accel,
             visibility,
+            refuse_above: epsilon,
+            norm_area: scene_area,
         }
     }
 
@@ -156,22 +173,30 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         {
             return None;
         }
-        // Some face of an end might see the link from behind: the vector form does not hold; split.
-        if alpha_s + cs.half_angle + spread > HALF_PI || alpha_r + cr.half_angle + spread > HALF_PI
-        {
-            return Some(Link::overlapping(src_id));
-        }
         let (_, r2) = centroid_geometry(recv.centroid(), src.centroid());
         if r2 <= 0.0 {
             return Some(Link::overlapping(src_id));
+        }
+        let gap = dist - rb.radius - sb.radius;
+        let pi_g2 = std::f64::consts::PI * gap * gap;
+        let (f_rs, f_sr) = ((as_ / pi_g2).min(1.0), (ar / pi_g2).min(1.0));
+        // Some face of an end might see the link from behind: the vector form does not hold; split, unless
+        // the link's geometric estimate is already below the final ε (then its error is too).
+        if alpha_s + cs.half_angle + spread > HALF_PI || alpha_r + cr.half_angle + spread > HALF_PI
+        {
+            let norm = if self.norm_area > 0.0 {
+                ar / self.norm_area
+            } else {
+                1.0
+            };
+            if f_rs.max(f_sr) * recv.reflectance().max_element() * norm > self.refuse_above {
+                return Some(Link::overlapping(src_id));
+            }
         }
         let v = self.visibility(recv, src);
         if v <= 0.0 {
             return None;
         }
-        let gap = dist - rb.radius - sb.radius;
-        let pi_g2 = std::f64::consts::PI * gap * gap;
-        let (f_rs, f_sr) = ((as_ / pi_g2).min(1.0), (ar / pi_g2).min(1.0));
         Some(Link {
             source: src_id,
             coefficient: v / (std::f64::consts::PI * r2),
