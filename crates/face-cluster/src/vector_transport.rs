@@ -19,9 +19,12 @@
 //! refinement splits it — unless its geometric estimate max(F_RS, F_SR) ρ_R (× A_R/A_scene with the power
 //! norm) is already below the final ε, which bounds the error of keeping it. Without that exception every
 //! pair whose cones straddle the link direction splits down to the input faces whatever light it carries
-//! (measured: 316,000 links for 600 faces of concentric spheres at ε = 1e-3). Pairs whose bounds overlap get a link that transfers nothing, with the form-factor
-//! bounds F_RS ≤ min(1, A_S/A_R) (reciprocity), so the oracle splits them until the power they could carry is
-//! below ε. A node whose two children face each other (each child's centroid in front of the other's mean
+//! (measured: 316,000 links for 600 faces of concentric spheres at ε = 1e-3).
+//!
+//! Pairs whose bounds overlap get a link that transfers nothing, with the form-factor bounds
+//! F_RS ≤ min(1, A_S/A_R) (reciprocity), so the oracle splits them until the power they could carry is below
+//! ε (the light such kept links would carry is lost). Every point transfer is capped so that neither end's
+//! form factor exceeds one: g = min(V/(π r²), V/max(A_R, A_S)). A node whose two children face each other (each child's centroid in front of the other's mean
 //! plane: a concave node) has a self-link; it carries f B̄ along the node's cone axis with
 //! f = (1 − cos θ)/2, the share of its own power a spherical cap of half-angle θ sends to itself
 //! (A_cap/(4πR²), exact for the inside of a sphere); flat (θ < 1e-6 rad), convex and single-face nodes have
@@ -112,6 +115,12 @@ fn centroid_geometry(recv: DVec3, src: DVec3) -> (DVec3, f64) {
     (v.normalize_or_zero(), v.length_squared())
 }
 
+/// The point transfer's coefficient g = V/(π r²), capped so that neither end's form factor exceeds one:
+/// F_RS ≤ g A_S ≤ 1 and F_SR ≤ g A_R ≤ 1 (close or touching clusters would otherwise gain energy).
+fn point_coefficient(v: f64, r2: f64, area_r: f64, area_s: f64) -> f64 {
+    (v / (std::f64::consts::PI * r2)).min(v / area_r.max(area_s))
+}
+
 const HALF_PI: f64 = std::f64::consts::FRAC_PI_2;
 
 impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
@@ -152,15 +161,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             if !(ar > 0.0 && as_ > 0.0) {
                 return None;
             }
-            // Carries the centroid-to-centroid point transfer (exact between small pieces of a sphere's
-            // inside, zero between coplanar pieces or when the source faces away) while the oracle keeps it.
-            let mut l = bound_only(src_id, (as_ / ar).min(1.0), (ar / as_).min(1.0));
-            let (_, r2) = centroid_geometry(recv.centroid(), src.centroid());
-            if r2 > 0.0 {
-                let v = self.visibility(recv, src);
-                l.coefficient = v / (std::f64::consts::PI * r2);
-                l.visibility = v as f32;
-            }
+            // Touching clusters: no point transfer (between touching clusters the centroid transfer can
+            // exceed what any face sees, and the solution diverged on boxes flush against walls); the oracle
+            // splits the pair until it is below ε, and patches meet through the exact kernel.
+            let l = bound_only(src_id, (as_ / ar).min(1.0), (ar / as_).min(1.0));
             return Some(l);
         }
         let d_c = between / dist;
@@ -199,7 +203,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
         Some(Link {
             source: src_id,
-            coefficient: v / (std::f64::consts::PI * r2),
+            coefficient: point_coefficient(v, r2, ar, as_),
             f_recv: f_rs as f32,
             f_src: f_sr as f32,
             spread: f_rs.max(f_sr) as f32,
