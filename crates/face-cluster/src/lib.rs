@@ -36,17 +36,20 @@
 //! ([`FaceClusterSolver::face_reads`] counts the faces read); radiosity at a point comes from the deepest node
 //! holding its face.
 //!
-//! Measured (release, 2 cores shared with other builds, so ratios only; 2026-11-30), solve time and links
-//! against k, ε = 1e-4: concentric spheres 1e3 → 1e4 → 1e5 faces: 1.8 → 4.6 → 12.0 s (slope 0.42), 156k →
-//! 285k → 383k links; bumpy sphere: 0.78 → 1.22 → 1.75 s (slope 0.18), 48k → 60k → 60k links.
+//! Measured (release, 2 threads on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
+//! solve wall time and links against k at the defaults: concentric spheres 1e3 → 1e4 → 1e5 faces:
+//! 0.94 → 2.30 → 5.67 s (slope 0.39 per decade), 156k → 285k → 384k links (slopes 0.26, 0.13); bumpy
+//! sphere: 0.43 → 0.65 → 0.89 s (slopes 0.18, 0.14), 48k → 59k → 59k links.
 //!
 //! Where the solve does badly (measured on concentric spheres, a furnace with B = E/(1 − ρ)):
-//! - It loses energy: the area mean is 4.4% low at 1,000 faces, 1.4% at 10⁴ and 10⁵ (ρ = 0.5), and the loss is
-//!   amplified by 1/(1 − ρ): 28% low at ρ = 0.9, 81% at 0.99, 98% at 0.999. Suspected causes: links kept below
-//!   the final ε although their ends' normal cones straddle the link direction (p·d then under-counts
-//!   Σ A_i max(0, n_i·d) B_i), and the centroid point transfer between touching curved clusters.
-//! - Smaller ε does not fix it (ε = 1e-5 is further off than 1e-4 on 2,400 faces): the oracle bounds each
-//!   link's power, not the bias the vector form adds on curved clusters.
+//! - It loses energy: the area mean is 4.4% low at 1,000 faces, 1.5% at 10⁴ and 1.4% at 10⁵ (ρ = 0.5), and the
+//!   loss is amplified by 1/(1 − ρ): at 10⁴ faces 10% low at ρ = 0.9 and 56% at 0.99. Suspected cause: links
+//!   kept below the final ε although their ends' normal cones straddle the link direction (p·d then
+//!   under-counts Σ A_i max(0, n_i·d) B_i), and touching clusters kept below ε exchange nothing. Refusing
+//!   such links down to ε/100 instead of ε gave 2.001 at 10⁴ faces, with 14 times the links and 18 times the
+//!   time (measured once, not a parameter yet).
+//! - The conformance suite's sliver and fan in a furnace are 54% off, and light reaches closed boxes flush
+//!   against walls (1.6e-4 of the lit maximum); not yet diagnosed.
 //!
 //! Where the hierarchy does badly: a mesh without shared vertices (a triangle soup) has no dual edges, so every face
 //! stays its own root; fix the input (the OBJ reader welds equal positions). Closed or strongly curved

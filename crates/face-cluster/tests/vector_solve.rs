@@ -172,10 +172,10 @@ fn furnace(faces: usize, rho: f64, threads: usize) -> (Vec<Rgb>, Vec<f64>, usize
 }
 
 /// Concentric spheres, every face E = 1 and ρ = 0.5: a closed furnace, B = E/(1 − ρ) = 2 everywhere
-/// (Christensen 1997, §8.3); the area-weighted mean within 1%. Fails today: 1.944 at 600 faces and
-/// ε = 1e-3 (2.8% low; single faces reach 2.13, so it is not a bound either), worse at smaller ε (area mean about 1.90 at 2,400 faces, ε = 1e-4): links kept although
-/// their ends' normal cones straddle the link direction (below the final ε) and the point transfer between
-/// touching curved clusters both under-estimate Σ A_i max(0, n_i·d) B_i.
+/// (Christensen 1997, §8.3); the area-weighted mean within 1%. Fails today: 1.935 at 600 faces and
+/// ε = 1e-3 (3.3% low), worse at smaller ε (area mean about 1.90 at 2,400 faces, ε = 1e-4): links kept although
+/// their ends' normal cones straddle the link direction (below the final ε) under-estimate
+/// Σ A_i max(0, n_i·d) B_i, and touching clusters kept below ε exchange nothing.
 #[test]
 #[ignore = "known 2-5% under-estimate on curved clusters; see the doc comment"]
 fn concentric_spheres_furnace_mean_within_one_percent() {
