@@ -155,6 +155,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.irradiance.push(h);
     }
 
+    /// Every node's total irradiance after the last pass's push (the transport's irradiance state).
+    pub fn irradiance(&self) -> &[T::Irradiance] {
+        &self.irradiance
+    }
+
     /// The structure, for transports that read a source's contents.
     pub fn view(&self) -> NodeView<'_, N> {
         NodeView {

@@ -50,6 +50,14 @@ pub trait NodeKind: Send + Sync + Sized {
     fn patch(&self) -> Option<&Patch> {
         None
     }
+
+    /// Whether, as a link's source, the node already sends what its emitting contents would send one by one
+    /// (a face cluster's power vector includes its faces' emission, Σ E_i A_i n_i). When false — by default,
+    /// for every node that is not within one input face — the refinement splits an emitting source before
+    /// anything else, so emitters are reached as surfaces.
+    fn sends_own_emission(&self) -> bool {
+        self.face().is_some()
+    }
 }
 
 /// Side of the integer parameter lattice every input face is addressed in.

@@ -102,7 +102,7 @@ pub fn decide<N: NodeKind>(
             Action::Keep
         };
     }
-    if can_s && src.face().is_none() && src.emission().max_element() > 0.0 {
+    if can_s && !src.sends_own_emission() && src.emission().max_element() > 0.0 {
         return Action::SplitSource;
     }
     let w = if oracle == Oracle::F { 1.0 } else { weight };

@@ -103,6 +103,14 @@ pub fn methods() -> Vec<MethodInfo> {
             radlab_volume_cluster::VolumeClusterSolver
         ),
         method!(
+            "face-cluster",
+            "Face cluster radiosity (Willmott, Heckbert & Garland 1999): face-cluster hierarchies from dual-graph \
+             contraction, irradiance and power vectors per node, links between the hierarchies' roots refined by \
+             the hierarchical oracles; gather, push and pull never read an input face. For detailed meshes.",
+            radlab_face_cluster::FaceClusterSolveParams,
+            radlab_face_cluster::FaceClusterSolver
+        ),
+        method!(
             "mc-radiosity",
             "Mesh-based Monte Carlo radiosity: particles shot from the emitters and deposited on a fixed element \
              mesh, a batch per step; error falls as N^(-1/2). The Monte Carlo counterpart of matrix and progressive.",

@@ -164,6 +164,49 @@ struct Exception {
 
 const EXCEPTIONS: &[Exception] = &[
     Exception {
+        method: "face-cluster",
+        case: "furnace sphere ρ=0.99",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 5.4e-2 (release, 2026-11-30); ρ = 0.9 passes at 6.4e-3.
+        reason: "the vector transfer loses energy on curved clusters (links kept below the final epsilon \
+                 although their normal cones straddle the link direction), amplified by 1/(1 - rho)",
+    },
+    Exception {
+        method: "face-cluster",
+        case: "furnace sphere ρ=0.999",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 3.6e-1 (release, 2026-11-30).
+        reason: "as at rho = 0.99: the vector transfer's energy loss on curved clusters, amplified by 1/(1 - rho)",
+    },
+    Exception {
+        method: "face-cluster",
+        case: "boxes touching walls",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 1.6e-4 of the lit maximum (release, 2026-11-30); before touching clusters
+        // stopped exchanging point transfers the solve diverged here.
+        reason: "light reaches the closed interiors of boxes flush against walls: not yet diagnosed (volume-cluster \
+                 has the same symptom)",
+    },
+    Exception {
+        method: "face-cluster",
+        case: "sliver (aspect 1e4) in a furnace",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 5.4e-1 (release, 2026-11-30).
+        reason: "not yet diagnosed: the sliver's radiosity is far off in the furnace at default settings",
+    },
+    Exception {
+        method: "face-cluster",
+        case: "fan with a near-zero-area face in a furnace",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 5.4e-1 (release, 2026-11-30).
+        reason: "not yet diagnosed: the fan's faces are off in the furnace at default settings",
+    },
+    Exception {
         method: "mc-radiosity",
         case: "fan with a near-zero-area face in a furnace",
         expect: Expect::Misses,

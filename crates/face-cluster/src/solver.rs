@@ -1,0 +1,308 @@
+//! [`FaceClusterSolver`]: face cluster radiosity (Willmott, Heckbert & Garland 1999) on radlab-hierarchical's
+//! generic engine. The face-cluster tree is built over the scene ([`FaceClusterTree::build`]), its roots (one
+//! per dual-connected part) become the engine's roots, and the first links are every ordered pair of roots and
+//! each curved root's self-link; refinement, gather/push-pull and the schedules are the engine's, light moves
+//! by [`VectorTransport`]. Radiosity at a point of a face comes from the deepest engine node holding the face:
+//! its patch if the refinement reached the face, else B = E + ρ max(0, n·e) with the irradiance vector e
+//! pushed to the deepest face cluster containing it (section 4's final propagation, per queried face).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::DVec3;
+use radlab_hierarchical::{
+    Engine, ErrorNorm, HierarchicalParams, MIN_ELEMENT_SIZE_REL, PatchKernel, SurfaceOutput,
+};
+use radlab_scene::{
+    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::face_node::{ClusterRef, FaceContext, FaceNode};
+use crate::vector_transport::VectorTransport;
+use crate::{FaceClusterParams, FaceClusterTree};
+
+/// Default ε of the face-cluster method (with the power error norm, as volume clusters).
+pub const DEFAULT_EPSILON: f64 = 1e-4;
+
+/// Parameters of the face-cluster method: every parameter of the hierarchical engine
+/// ([`HierarchicalParams`]: same names, same checks) with the power error norm and ε = 1e-4 by default; the
+/// hierarchy is built with [`FaceClusterParams::default`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FaceClusterSolveParams {
+    /// The engine's parameters.
+    #[serde(flatten)]
+    pub engine: HierarchicalParams,
+}
+
+impl Default for FaceClusterSolveParams {
+    fn default() -> Self {
+        Self {
+            engine: HierarchicalParams {
+                error_norm: ErrorNorm::Power,
+                epsilon: DEFAULT_EPSILON,
+                ..HierarchicalParams::default()
+            },
+        }
+    }
+}
+
+impl MethodParams for FaceClusterSolveParams {
+    fn docs() -> Vec<(&'static str, &'static str)> {
+        HierarchicalParams::docs()
+            .into_iter()
+            .filter(|(k, _)| *k != "lazy_linking")
+            .collect()
+    }
+
+    fn validate(&self) -> Result<(), SolveError> {
+        self.engine.validate()
+    }
+
+    fn default_values() -> Vec<(String, String)> {
+        HierarchicalParams::default_values()
+            .into_iter()
+            .filter(|(k, _)| k != "lazy_linking")
+            .map(|(k, v)| {
+                let d = Self::default();
+                match k.as_str() {
+                    "epsilon" => (k, d.engine.epsilon.to_string()),
+                    "error_norm" => (k, "\"power\"".to_string()),
+                    _ => (k, v),
+                }
+            })
+            .collect()
+    }
+
+    fn from_table(mut table: toml::Table) -> Result<Self, SolveError> {
+        if table.remove("lazy_linking").is_some() {
+            return Err(SolveError::param(
+                "lazy_linking",
+                "face clusters start from links between the hierarchy's roots, so there are no initial \
+                 links to make lazily; remove the parameter",
+            ));
+        }
+        let mut full = toml::Table::try_from(Self::default().engine)
+            .map_err(|e| SolveError::param("parameters", e.to_string()))?;
+        full.extend(table);
+        let engine = HierarchicalParams::from_table(full)?;
+        Ok(Self { engine })
+    }
+}
+
+/// Face cluster radiosity; see the module documentation.
+#[derive(Debug)]
+pub struct FaceClusterSolver<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    ctx: Arc<FaceContext<'a>>,
+    engine: Engine<FaceNode<'a>, VectorTransport<'a>>,
+    output: SurfaceOutput,
+    /// Engine node of each tree node materialised so far.
+    engine_node: HashMap<u32, u32>,
+    scanned: usize,
+    rays: u64,
+}
+
+impl<'a> FaceClusterSolver<'a> {
+    /// Builds the hierarchy over `scene` (its cost is the construction's, reported apart from the steps) and
+    /// the first links.
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: FaceClusterSolveParams,
+        seed: u64,
+    ) -> Result<Self, SolveError> {
+        let tree = FaceClusterTree::build(scene, &FaceClusterParams::default())
+            .map_err(|e| SolveError::param("scene", e.to_string()))?;
+        Self::with_tree(scene, accel, &params, seed, tree)
+    }
+
+    /// The solver over a hierarchy already built (or read from a cache) for `scene`.
+    pub fn with_tree(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: &FaceClusterSolveParams,
+        seed: u64,
+        tree: FaceClusterTree,
+    ) -> Result<Self, SolveError> {
+        params.validate()?;
+        if scene.face_count() == 0 {
+            return Err(SolveError::param(
+                "scene",
+                "the scene has no faces to cluster",
+            ));
+        }
+        if tree.face_order().len() != scene.face_count() {
+            return Err(SolveError::param(
+                "scene",
+                format!(
+                    "the face-cluster hierarchy covers {} faces but the scene has {}; rebuild it for this scene",
+                    tree.face_order().len(),
+                    scene.face_count()
+                ),
+            ));
+        }
+        let p = params.engine.clone();
+        let min_size = p
+            .min_element_size
+            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
+        if !(min_size > 0.0 && min_size.is_finite()) {
+            return Err(SolveError::param(
+                "min_element_size",
+                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
+            ));
+        }
+        let roots = tree.roots();
+        let scene_area: f64 = roots.clone().map(|r| tree.node(r).area).sum();
+        let ctx = Arc::new(FaceContext::new(tree, scene));
+        let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
+        let transport = VectorTransport::new(
+            patches,
+            accel,
+            p.visibility,
+            p.epsilon,
+            if p.error_norm == ErrorNorm::Power {
+                scene_area
+            } else {
+                0.0
+            },
+        );
+        let output = SurfaceOutput::new(p.interpolation);
+        let nodes: Vec<FaceNode<'a>> = roots
+            .clone()
+            .map(|id| {
+                FaceNode::Cluster(ClusterRef {
+                    ctx: Arc::clone(&ctx),
+                    id: id as u32,
+                })
+            })
+            .collect();
+        let mut engine = Engine::new(nodes, transport, p, min_size)?;
+        engine.skip_initial_links();
+        let before = accel.rays_cast();
+        let n = roots.len() as u32;
+        for r in 0..n {
+            for s in 0..n {
+                engine.add_link(r, s)?;
+            }
+        }
+        let rays = accel.rays_cast().saturating_sub(before);
+        let mut s = Self {
+            scene,
+            accel,
+            ctx,
+            engine,
+            output,
+            engine_node: HashMap::new(),
+            scanned: 0,
+            rays,
+        };
+        s.index_new_nodes();
+        s.output.update(&s.engine, scene.face_count());
+        Ok(s)
+    }
+
+    fn index_new_nodes(&mut self) {
+        let nodes = self.engine.nodes();
+        for (i, n) in nodes.iter().enumerate().skip(self.scanned) {
+            if let FaceNode::Cluster(c) = n {
+                self.engine_node.insert(c.id, i as u32);
+            }
+        }
+        self.scanned = nodes.len();
+    }
+
+    /// The engine, for inspection and tests.
+    pub fn engine(&self) -> &Engine<FaceNode<'a>, VectorTransport<'a>> {
+        &self.engine
+    }
+
+    /// The face-cluster hierarchy and the per-node sums.
+    pub fn context(&self) -> &FaceContext<'a> {
+        &self.ctx
+    }
+
+    /// Input faces the solve has read (tree leaves split into their faces' patches).
+    pub fn face_reads(&self) -> u64 {
+        self.ctx.face_reads()
+    }
+
+    /// The engine node nearest above face `face` and, if it is a cluster, the irradiance vector there: the
+    /// deepest materialised tree node on the path from the face's leaf to its root (O(depth)).
+    fn deepest_cluster(&self, face: FaceId) -> Option<u32> {
+        let tree = &self.ctx.tree;
+        let mut n = tree.leaf_of_face(face);
+        loop {
+            if let Some(&i) = self.engine_node.get(&(n as u32)) {
+                return Some(i);
+            }
+            n = tree.node(n).parent()?;
+        }
+    }
+
+    /// Radiosity of every input face: the area mean over its patch leaves where the refinement reached it,
+    /// else E + ρ max(0, n·e) from the deepest cluster above it. Linear in k: for output, not for the solve.
+    pub fn face_radiosity(&self) -> Vec<(FaceId, f64, Rgb)> {
+        (0..self.scene.face_count())
+            .map(|f| {
+                let face = &self.scene.faces[f];
+                (f, face.area, self.radiosity_at(f, face.centroid))
+            })
+            .collect()
+    }
+
+    fn stats(&self) -> Stats {
+        self.engine.stats(
+            self.rays,
+            self.output.bytes() + self.ctx.bytes() as u64 + (self.engine_node.capacity() * 16) as u64,
+        )
+    }
+    }
+
+    fn step(&mut self) -> Result<Step, SolveError> {
+        let before = self.accel.rays_cast();
+        let s = self.engine.step();
+        self.rays += self.accel.rays_cast().saturating_sub(before);
+        let s = s?;
+        self.index_new_nodes();
+        self.output.update(&self.engine, self.scene.face_count());
+        Ok(s)
+    }
+}
+
+impl Solution for FaceClusterSolver<'_> {
+    fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
+        if face >= self.scene.face_count() {
+            return Rgb::ZERO;
+        }
+        if self.engine.face_node(face).is_some() {
+            return self.output.radiosity_at(&self.engine, face, point);
+        }
+        let Some(i) = self.deepest_cluster(face) else {
+            return Rgb::ZERO;
+        };
+        let e = &self.engine.irradiance()[i as usize];
+        let n = self.scene.faces[face].normal;
+        let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
+        Rgb::new(
+            em[0] + rho[0] * n.dot(e[0]).max(0.0),
+            em[1] + rho[1] * n.dot(e[1]).max(0.0),
+            em[2] + rho[2] * n.dot(e[2]).max(0.0),
+        )
+    }
+}
+
+impl Solver for FaceClusterSolver<'_> {
+    fn step(&mut self) -> Result<Step, SolveError> {
+        FaceClusterSolver::step(self)
+    }
+
+    fn solution(&self) -> &dyn Solution {
+        self
+    }
+
+    fn stats(&self) -> Stats {
+        FaceClusterSolver::stats(self)
+    }
+}

@@ -1,0 +1,216 @@
+//! The vector radiosity solve of face cluster radiosity (Willmott, Heckbert & Garland 1999) on the
+//! hierarchical engine: tessellation invariance against the single-link closed form, no input face read by
+//! the solve, the concentric-spheres furnace B = E/(1 − ρ), thread-count and scale invariance.
+
+use glam::dvec3;
+use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver, FaceNode};
+use radlab_scene::{
+    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin,
+};
+
+/// A unit floor (z = 0, facing up, ρ = 0.5) as `cells` × `cells` squares of two triangles each (or one quad
+/// when `cells` is 0), and a 0.2 × 0.2 light (E = 10, ρ = 0) at height 5 facing down; lengths × `scale`.
+fn floor_and_light(cells: usize, scale: f64) -> Scene {
+    let mut b = SceneBuilder::new("floor");
+    let floor = b
+        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
+        .expect("valid");
+    let light = b
+        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(10.0)).expect("valid"))
+        .expect("valid");
+    if cells == 0 {
+        b.add_polygon_points(
+            &[
+                dvec3(0.0, 0.0, 0.0) * scale,
+                dvec3(1.0, 0.0, 0.0) * scale,
+                dvec3(1.0, 1.0, 0.0) * scale,
+                dvec3(0.0, 1.0, 0.0) * scale,
+            ],
+            floor,
+            "floor",
+        )
+        .expect("valid");
+    } else {
+        let n = cells;
+        for j in 0..=n {
+            for i in 0..=n {
+                b.add_vertex(
+                    dvec3(i as f64 / n as f64, j as f64 / n as f64, 0.0) * scale,
+                    "floor",
+                )
+                .expect("finite");
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        for j in 0..n {
+            for i in 0..n {
+                b.add_polygon(&[id(i, j), id(i + 1, j), id(i + 1, j + 1)], floor, "floor")
+                    .expect("valid");
+                b.add_polygon(&[id(i, j), id(i + 1, j + 1), id(i, j + 1)], floor, "floor")
+                    .expect("valid");
+            }
+        }
+    }
+    b.add_polygon_points(
+        &[
+            dvec3(0.4, 0.4, 5.0) * scale,
+            dvec3(0.4, 0.6, 5.0) * scale,
+            dvec3(0.6, 0.6, 5.0) * scale,
+            dvec3(0.6, 0.4, 5.0) * scale,
+        ],
+        light,
+        "light",
+    )
+    .expect("valid");
+    b.build().expect("scene")
+}
+
+fn params(pairs: &[(&str, &str)]) -> FaceClusterSolveParams {
+    let pairs: Vec<(String, String)> = pairs
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    FaceClusterSolveParams::from_pairs(&pairs).expect("valid parameters")
+}
+
+fn solve(s: &mut FaceClusterSolver<'_>) {
+    for _ in 0..500 {
+        if s.step().expect("step") != Step::Continue {
+            return;
+        }
+    }
+    panic!("no convergence in 500 steps");
+}
+
+/// The floor's radiosity at a few points, the link count, engine node count and faces read.
+fn floor_answer(cells: usize, scale: f64) -> (Vec<Rgb>, usize, usize, u64) {
+    let scene = floor_and_light(cells, scale);
+    let accel = Accel::new(&scene);
+    let p = params(&[("oracle", "f"), ("epsilon", "0.05")]);
+    let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
+    solve(&mut s);
+    let floor_faces = scene.face_count() - 1;
+    let b = [0, floor_faces / 3, floor_faces - 1]
+        .iter()
+        .map(|&f| s.radiosity_at(f, scene.faces[f].centroid))
+        .collect();
+    (
+        b,
+        s.engine().link_count(),
+        s.engine().nodes().len(),
+        s.face_reads(),
+    )
+}
+
+/// A planar quad as 2, 200 and 20,000 triangles: the same links and the same radiosity as the single quad
+/// (M, p_E and the centroid do not depend on the split), equal to the one link's closed form
+/// B = ρ E_l A_l / (π h²) (both normals along the link), and the solve reads no input face.
+#[test]
+fn tessellated_quad_matches_the_single_quad_and_reads_no_face() {
+    let want = 0.5 * 10.0 * 0.04 / (std::f64::consts::PI * 25.0);
+    let (b0, links0, nodes0, reads0) = floor_answer(0, 1.0);
+    assert_eq!(links0, 2, "light → floor and floor → light");
+    assert_eq!(reads0, 0);
+    for b in &b0 {
+        assert!(
+            (*b - Rgb::splat(want)).abs().max_element() <= 1e-12 * want,
+            "{b}"
+        );
+    }
+    for cells in [1, 10, 100] {
+        let (b, links, nodes, reads) = floor_answer(cells, 1.0);
+        assert_eq!(links, links0, "{cells}");
+        assert_eq!(nodes, nodes0, "{cells}: nodes visited stay flat");
+        assert_eq!(reads, 0, "{cells}: the solve read input faces");
+        for x in &b {
+            assert!(
+                (*x - b0[0]).abs().max_element() <= 1e-9 * want,
+                "{cells}: {x} vs {}",
+                b0[0]
+            );
+        }
+    }
+}
+
+/// Lengths × 1e-4 and × 1e4 give the same links and radiosity (all quantities are relative).
+#[test]
+fn scale_does_not_change_the_answer() {
+    let (b, links, nodes, _) = floor_answer(10, 1.0);
+    for scale in [1e-4, 1e4] {
+        let (bs, ls, ns, _) = floor_answer(10, scale);
+        assert_eq!((ls, ns), (links, nodes), "scale {scale}");
+        for (x, y) in bs.iter().zip(&b) {
+            assert!(
+                (*x - *y).abs().max_element() <= 1e-9 * y.max_element(),
+                "{scale}: {x} vs {y}"
+            );
+        }
+    }
+}
+
+fn furnace(faces: usize, rho: f64, threads: usize) -> (Vec<Rgb>, Vec<f64>, usize) {
+    let scene = builtin(&format!(
+        "concentric-spheres?faces={faces}&reflectance={rho}"
+    ))
+    .expect("scene");
+    let accel = Accel::new(&scene);
+    let p = params(&[("epsilon", "0.001"), ("visibility", "centre")]);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let mut s = FaceClusterSolver::new(&scene, &accel, p, 3).expect("solver");
+        solve(&mut s);
+        let fr = s.face_radiosity();
+        (
+            fr.iter().map(|x| x.2).collect(),
+            fr.iter().map(|x| x.1).collect(),
+            s.engine().link_count(),
+        )
+    })
+}
+
+/// Concentric spheres, every face E = 1 and ρ = 0.5: a closed furnace, B = E/(1 − ρ) = 2 everywhere
+/// (Christensen 1997, §8.3); the area-weighted mean within 1%. Fails today: 1.935 at 600 faces and
+/// ε = 1e-3 (3.3% low), worse at smaller ε (area mean about 1.90 at 2,400 faces, ε = 1e-4): links kept although
+/// their ends' normal cones straddle the link direction (below the final ε) under-estimate
+/// Σ A_i max(0, n_i·d) B_i, and touching clusters kept below ε exchange nothing.
+#[test]
+#[ignore = "known 2-5% under-estimate on curved clusters; see the doc comment"]
+fn concentric_spheres_furnace_mean_within_one_percent() {
+    let (b, area, _) = furnace(600, 0.5, 2);
+    let total: f64 = area.iter().sum();
+    let mean: f64 = b.iter().zip(&area).map(|(b, a)| b.x * a).sum::<f64>() / total;
+    assert!((mean - 2.0).abs() <= 0.02, "area-mean B = {mean}, want 2");
+}
+
+/// One and two threads give the same bits.
+#[test]
+fn one_and_two_threads_agree() {
+    let one = furnace(300, 0.5, 1);
+    let two = furnace(300, 0.5, 2);
+    assert_eq!(one.2, two.2);
+    for (x, y) in one.0.iter().zip(&two.0) {
+        assert_eq!(
+            x.to_array().map(f64::to_bits),
+            y.to_array().map(f64::to_bits)
+        );
+    }
+}
+
+/// The engine's leaves below the floor's root are clusters, never patches, at the test's ε.
+#[test]
+fn refinement_stays_above_the_faces() {
+    let scene = floor_and_light(100, 1.0);
+    let accel = Accel::new(&scene);
+    let p = params(&[("oracle", "f"), ("epsilon", "0.05")]);
+    let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
+    solve(&mut s);
+    assert!(
+        s.engine()
+            .nodes()
+            .iter()
+            .all(|n| matches!(n, FaceNode::Cluster(_)))
+    );
+}
