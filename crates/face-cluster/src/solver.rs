@@ -255,9 +255,10 @@ impl<'a> FaceClusterSolver<'a> {
     fn stats(&self) -> Stats {
         self.engine.stats(
             self.rays,
-            self.output.bytes() + self.ctx.bytes() as u64 + (self.engine_node.capacity() * 16) as u64,
+            self.output.bytes()
+                + self.ctx.bytes() as u64
+                + (self.engine_node.capacity() * 16) as u64,
         )
-    }
     }
 
     fn step(&mut self) -> Result<Step, SolveError> {
