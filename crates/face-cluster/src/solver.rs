@@ -168,7 +168,7 @@ impl<'a> FaceClusterSolver<'a> {
                 0.0
             },
         );
-        let output = SurfaceOutput::new(p.interpolation);
+        let output = SurfaceOutput::new(p.reconstruction, seed);
         let nodes: Vec<FaceNode<'a>> = roots
             .clone()
             .map(|id| {
@@ -278,7 +278,9 @@ impl Solution for FaceClusterSolver<'_> {
             return Rgb::ZERO;
         }
         if self.engine.face_node(face).is_some() {
-            return self.output.radiosity_at(&self.engine, face, point);
+            return self
+                .output
+                .radiosity_at(&self.engine, self.scene, self.accel, face, point);
         }
         let Some(i) = self.deepest_cluster(face) else {
             return Rgb::ZERO;
