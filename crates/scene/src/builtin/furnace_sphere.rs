@@ -1,6 +1,6 @@
 //! The furnace sphere: the inside of a closed tessellated sphere, every face with the same reflectance ρ and
-//! emission E. In any closed scene with uniform ρ and E the radiosity is B = E/(1 − ρ) everywhere
-//!, whatever the tessellation; the sphere adds curved, non-axis-aligned faces of
+//! emission E. In any closed scene with uniform ρ and E the radiosity is B = E/(1 − ρ) everywhere, whatever
+//! the tessellation; the sphere adds curved, non-axis-aligned faces of
 //! varied shape to the furnace cube. The tessellation is the cube sphere of [`super::primitives`]:
 //! 12 n² triangles facing the centre.
 //!
