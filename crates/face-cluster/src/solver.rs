@@ -10,9 +10,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::DVec3;
-use radlab_hierarchical::{
-    Engine, ErrorNorm, HierarchicalParams, MIN_ELEMENT_SIZE_REL, PatchKernel, SurfaceOutput,
-};
+use radlab_hierarchical::{Engine, ErrorNorm, HierarchicalParams, PatchKernel, SurfaceOutput};
 use radlab_scene::{
     Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
 };
@@ -144,15 +142,7 @@ impl<'a> FaceClusterSolver<'a> {
             ));
         }
         let p = params.engine.clone();
-        let min_size = p
-            .min_element_size
-            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
-        if !(min_size > 0.0 && min_size.is_finite()) {
-            return Err(SolveError::param(
-                "min_element_size",
-                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
-            ));
-        }
+        let min_size = p.resolve_min_size(scene)?;
         let roots = tree.roots();
         let scene_area: f64 = roots.clone().map(|r| tree.node(r).area).sum();
         let ctx = Arc::new(FaceContext::new(tree, scene));

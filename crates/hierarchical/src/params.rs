@@ -159,6 +159,20 @@ impl HierarchicalParams {
         p
     }
 
+    /// The minimum element edge for `scene`: the parameter, or the scene's diagonal × [`MIN_ELEMENT_SIZE_REL`].
+    pub fn resolve_min_size(&self, scene: &radlab_scene::Scene) -> Result<f64, SolveError> {
+        let min_size = self
+            .min_element_size
+            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
+        if !(min_size > 0.0 && min_size.is_finite()) {
+            return Err(SolveError::param(
+                "min_element_size",
+                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
+            ));
+        }
+        Ok(min_size)
+    }
+
     /// The ε of scheduled stage `stage` (0-based): ε·α^(stages−1−stage), never below ε.
     pub fn stage_epsilon(&self, stage: u32) -> f64 {
         let ahead = self.stages.saturating_sub(1).saturating_sub(stage);

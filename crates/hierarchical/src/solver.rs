@@ -10,7 +10,7 @@ use crate::hierarchy::Engine;
 use crate::link::PatchKernel;
 use crate::node::Patch;
 use crate::output::{SurfaceOutput, locate};
-use crate::params::{HierarchicalParams, MIN_ELEMENT_SIZE_REL};
+use crate::params::HierarchicalParams;
 
 /// Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991) over a scene; see the crate documentation.
 #[derive(Debug)]
@@ -32,15 +32,7 @@ impl<'a> HierarchicalSolver<'a> {
         seed: u64,
     ) -> Result<Self, SolveError> {
         params.validate()?;
-        let min_size = params
-            .min_element_size
-            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
-        if !(min_size > 0.0 && min_size.is_finite()) {
-            return Err(SolveError::param(
-                "min_element_size",
-                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
-            ));
-        }
+        let min_size = params.resolve_min_size(scene)?;
         let roots = (0..scene.face_count())
             .map(|f| Patch::root(scene, f))
             .collect();

@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use radlab_hierarchical::{Engine, MIN_ELEMENT_SIZE_REL, PatchKernel, SurfaceOutput};
+use radlab_hierarchical::{Engine, PatchKernel, SurfaceOutput};
 use radlab_scene::{
     Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
 };
@@ -66,15 +66,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
     ) -> Result<Self, SolveError> {
         params.validate()?;
         let p = params.engine.clone();
-        let min_size = p
-            .min_element_size
-            .unwrap_or(MIN_ELEMENT_SIZE_REL * scene.diagonal());
-        if !(min_size > 0.0 && min_size.is_finite()) {
-            return Err(SolveError::param(
-                "min_element_size",
-                format!("resolved to {min_size}; the scene's diagonal must be finite and > 0"),
-            ));
-        }
+        let min_size = p.resolve_min_size(scene)?;
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
         let transport = ClusterTransport::new(patches, accel, p.visibility, seed);
         let output = SurfaceOutput::new(p.reconstruction, seed);
