@@ -3,14 +3,14 @@
 //! G_ij = ½ (A_i F_ij + A_j F_ji) for i ≠ j,   G_ii = ½ Σ_j (A_i F_ij − A_j F_ji),
 //!
 //! where each F_ij is the receiver-side quadrature of the exact point-to-polygon kernel over element i times a
-//! visibility fraction V_ij (ALGORITHMS.md, "Area to area"; Wallace, Elmquist & Haines 1989 split kernel and
+//! visibility fraction V_ij (Wallace, Elmquist & Haines 1989 split kernel and
 //! visibility the same way). The discrete equation is B_i = E_i + ρ_i Σ_j F'_ij B_j with F'_ij = G_ij / A_i
 //! (survey eq. 4 discretised with constant elements).
 //!
 //! Why this form: the quadratures A_i F_ij and A_j F_ji estimate the same quantity ∫∫ G V dA dA but differ by
 //! their quadrature errors, so the raw matrix is only approximately reciprocal. Averaging them makes
-//! A_i F'_ij = A_j F'_ji exact, which the symmetric form of conjugate gradient (ALGORITHMS.md, "Matrix
-//! radiosity") and energy conservation (emitted = absorbed + escaped) both need. The diagonal term puts the
+//! A_i F'_ij = A_j F'_ji exact, which the symmetric form of conjugate gradient (see
+//! conjugate_gradient.rs) and energy conservation (emitted = absorbed + escaped) both need. The diagonal term puts the
 //! difference back on the row, so every row keeps the sum of its own receiver quadrature:
 //! Σ_j F'_ij = Σ_j F_ij, which the exact point kernel makes 1 to rounding in a closed unoccluded scene (the
 //! furnace stays exact at ρ → 1). The correction is local: it changes nothing where neighbouring radiosities

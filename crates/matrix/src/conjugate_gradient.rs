@@ -1,5 +1,5 @@
 //! Preconditioned conjugate gradient (Hestenes & Stiefel 1952; Saad 2003, Algorithm 9.1) on the symmetric
-//! form of the radiosity system (ALGORITHMS.md, "Matrix radiosity"): row i multiplied by A_i/ρ_i,
+//! form of the radiosity system (Cohen & Wallace 1993, ch. 5): row i multiplied by A_i/ρ_i,
 //!
 //! K B = b,   K_ij = (A_i/ρ_i) δ_ij − G_ij,   b_i = A_i E_i/ρ_i + Σ_{j fixed} G_ij E_j,
 //!

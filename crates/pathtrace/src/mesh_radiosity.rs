@@ -1,7 +1,7 @@
 //! Mesh-based Monte Carlo radiosity (survey 2.2.4): a view-independent solution over a fixed element mesh,
 //! estimated by particles shot from the emitters and deposited on the elements they hit, as a [`Solver`].
 //!
-//! The unknowns are those of the discretised radiosity system (ALGORITHMS.md), written for powers
+//! The unknowns are those of the discretised radiosity system (Cohen & Wallace 1993, ch. 3), written for powers
 //! P_j = A_j B_j: P_j = A_j E_j + ρ_j Σ_i F_ij P_i. A particle leaving a uniformly chosen point of element i
 //! in a cosine-distributed direction lands on element j with probability exactly F_ij (visibility included),
 //! so tallying the power Φ_j arriving at each element estimates the incident powers without computing a

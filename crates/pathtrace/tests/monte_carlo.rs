@@ -744,7 +744,7 @@ fn an_emitter_facing_away_lights_nothing() {
 
 #[test]
 fn results_do_not_depend_on_the_scene_scale() {
-    // Scenes scaled by 1e-4 and 1e4 (ALGORITHMS.md, stability): the furnace and the closed form still hold.
+    // Scenes scaled by 1e-4 and 1e4 (stability at the extremes): the furnace and the closed form still hold.
     for size in [1e-4, 1e4] {
         let scene = builtin(&format!(
             "furnace-cube?reflectance=0.7&tessellation=2&size={size}"

@@ -1,4 +1,4 @@
-//! The command line (ARCHITECTURE.md, "The `radlab` command line"): parsed with clap, dispatched to
+//! The command line (README.md, "The command line"): parsed with clap, dispatched to
 //! [`crate::commands`]. Errors print as `error: ...` with their causes and exit with status 1.
 
 use anyhow::Result;

@@ -5,7 +5,7 @@
 //!   mesh Monte Carlo cast) and visibility (`visible_between` two surface points, as form factors and
 //!   next-event estimation cast), for each [`AccelPreset`], on three enclosures: the Cornell box (36
 //!   triangles, open at the front), the Cornell box tessellated 32 × 32 (about 4 · 10⁴ triangles), and the
-//!   bumpy sphere in its closed room with 10⁵ (the size of ARCHITECTURE.md's measurements) and 10⁶ triangles.
+//!   bumpy sphere in its closed room with 10⁵ and 10⁶ triangles.
 //!   Closest hit is also timed with the presets in alternation (printed), which a shared machine's drifting
 //!   load cannot bias.
 //! - The 2-thread speed-up of closest hit and visibility (default preset, rays split into chunks over a rayon

@@ -1,5 +1,5 @@
 //! Evaluation points: deterministic, area-stratified points over every non-emitting face (over every face when
-//! all of them emit, as in a furnace), the same for every method and the reference (ARCHITECTURE.md,
+//! all of them emit, as in a furnace), the same for every method and the reference (README.md,
 //! "Conventions that make comparisons fair"). Emitters are left out otherwise because their radiosity is
 //! dominated by their own emission, which every method gets exactly right.
 //!

@@ -1,4 +1,4 @@
-//! The two traits every method meets the runner at (ARCHITECTURE.md): a [`Solution`] answers radiosity at a
+//! The two traits every method meets the runner at: a [`Solution`] answers radiosity at a
 //! surface point; a [`Solver`] advances one unit of work per [`Solver::step`] so the runner can time, trace and
 //! stop it. Solvers never print, write files or read the clock for reports.
 

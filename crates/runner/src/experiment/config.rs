@@ -42,7 +42,7 @@ fn default_seeds() -> Vec<u64> {
     vec![1]
 }
 
-/// Evaluation points (ARCHITECTURE.md): area-stratified over the non-emitting faces.
+/// Evaluation points: area-stratified over the non-emitting faces.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Evaluation {

@@ -1,5 +1,5 @@
-//! `radlab run`, `radlab merge` and `radlab plot`: experiments from TOML configs (ARCHITECTURE.md; issue
-//! "The experiment runner").
+//! `radlab run`, `radlab merge` and `radlab plot`: experiments from TOML configs
+//! (documented key by key in experiments/README.md).
 //!
 //! `run` expands the config into runs, computes (or reads from `results/references/`) each scene's reference at
 //! its evaluation points, executes every run not already complete with the same digest (each in a child

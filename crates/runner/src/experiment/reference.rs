@@ -1,6 +1,6 @@
 //! The reference solution at the evaluation points, computed once per (scene, points, reference settings) and
 //! cached under `results/references/<digest>.csv`:
-//! - `furnace`: B = E/(1−ρ) (a closed surface with one material; ALGORITHMS.md "Analytic whole-scene answers");
+//! - `furnace`: B = E/(1−ρ) (a closed surface with one material: the furnace);
 //! - `direct`: B(x) = E(x) + ρ(x) Σ_e E_e F_{dx→e} V(x, e), the exact point-to-polygon factor times a
 //!   visibility fraction from 8 × 8 stratified rays (exact for scenes where light bounces once, e.g. the plates);
 //! - `pathtrace`: radlab-pathtrace's per-point estimator, whose standard error is the noise floor.

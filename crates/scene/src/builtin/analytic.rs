@@ -1,4 +1,4 @@
-//! Builtin scenes with analytic answers (ALGORITHMS.md): the furnace cube (closed, uniform ρ and E, so
+//! Builtin scenes with analytic answers: the furnace cube (closed, uniform ρ and E, so
 //! B = E/(1−ρ) everywhere) and the plate pairs of Howell's catalogue (parallel coaxial rectangles; perpendicular
 //! rectangles sharing an edge), where the receiver's radiosity is B = ρ E F.
 

@@ -1,4 +1,4 @@
-//! Area-to-area form factor with visibility (ALGORITHMS.md, "Area to area"):
+//! Area-to-area form factor with visibility (Wallace, Elmquist & Haines 1989 split kernel and visibility this way):
 //!
 //! F_ij ≈ V_ij · Σ_k w_k F_{dA(x_k)→A_j},  (x_k, w_k) a product Gauss–Legendre rule over A_i,
 //!

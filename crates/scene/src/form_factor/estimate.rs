@@ -1,4 +1,5 @@
-//! The cheap form-factor estimate refinement oracles use (ALGORITHMS.md):
+//! The cheap form-factor estimate refinement oracles use (Wallace, Elmquist & Haines 1989, the disc
+//! approximation):
 //!
 //! F_ij ≈ A_j cosθ_i cosθ_j / (π r² + A_j)
 //!
