@@ -1,5 +1,5 @@
 //! Vertex-interpolated (Gouraud) output over each input face's quadtree, with T-vertices resolved
-//! (survey 2.4.5–2.4.6; Baum et al. 1991 anchor such vertices).
+//! (Baum et al. 1991 anchor such vertices; Cohen & Wallace 1993, ch. 8).
 //!
 //! A corner shared by leaves takes their area-weighted mean radiosity, B_v = Σ A_i B_i / Σ A_i over the leaves of
 //! the face that have v as a corner. A T-vertex — a corner of finer leaves lying inside an edge (P, Q) of a

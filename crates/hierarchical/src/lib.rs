@@ -1,6 +1,6 @@
 //! # radlab-hierarchical
 //!
-//! Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991; survey 2.3.2 and 2.4): each input face is the
+//! Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991): each input face is the
 //! root of a quadtree of elements (quads split into four at edge midpoints and centre, triangles into four at
 //! edge midpoints), built lazily as links need it. Light moves along *links* between elements at whatever
 //! level of their quadtrees the refinement oracle accepts: coarse between distant or dim pairs, fine between
@@ -15,7 +15,7 @@
 //! | `epsilon` | 0.01 | refinement threshold on the oracle's estimate (dimensionless) |
 //! | `oracle` | `variation` | `f` (max(F_rs, F_sr)), `bf` (ρ_r B_s/B̄ × that, B̄ the area-mean radiosity), `variation` (spread of kernel samples × ρ_r B_s/B̄) |
 //! | `error_norm` | `radiosity` | `radiosity` (the estimate as is) or `power` (× A_r / A_scene: the power a link brings) |
-//! | `schedule` | `scheduled` | `two-stage`, `interleaved`, `scheduled` (survey 2.4.3) |
+//! | `schedule` | `scheduled` | `two-stage`, `interleaved`, `scheduled` (Willmott 2000, §2.4.3) |
 //! | `alpha` | 2 | scheduled: ε_{i+1} = ε_i/α, from ε·α^(stages−1) down to ε |
 //! | `stages` | 3 | scheduled: stages over which ε falls |
 //! | `lazy_linking` | true | interleaved/scheduled: link from a face only once it carries light |
@@ -36,9 +36,9 @@
 //! link examined once) or one gather/push-pull pass. The solution is usable after any step.
 //!
 //! ## Cost
-//! O(k² + n) links and time for k input faces and n elements (survey 2.3.2): every pair of mutually visible
+//! O(k² + n) links and time for k input faces and n elements (Hanrahan, Salzman & Aupperle 1991): every pair of mutually visible
 //! input faces gets an initial link (16 rays each by default), and the refined links number a bounded
-//! multiple of the elements for a fixed ε (about 1/ε with the `f` oracle; survey 2.4.1). Memory: about 250
+//! multiple of the elements for a fixed ε (about 1/ε with the `f` oracle: Hanrahan, Salzman & Aupperle 1991, §4.2). Memory: about 250
 //! bytes per element, 32 per link and, with `gather = leaf`, 16 per (leaf, link above it).
 //!
 //! ## When it does badly

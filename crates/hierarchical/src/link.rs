@@ -8,7 +8,7 @@
 //! the receiver-side quadrature of the exact point-to-polygon factor (Lambert's contour integral, clipped to
 //! the receiver's horizon; Baum, Rushmeier & Winget 1989, eq. 3), and V_rs the fraction of unobstructed rays
 //! between the two (1, 4, 16 or 64 rays; Wallace, Elmquist & Haines 1989 split kernel and visibility the same
-//! way). A link also keeps what the refinement oracles read (survey 2.4.1): both unoccluded form factors F_rs
+//! way). A link also keeps what the refinement oracles read (Hanrahan, Salzman & Aupperle 1991; Stamminger et al. 1997): both unoccluded form factors F_rs
 //! and F_sr (HSA91 refine while either is large) and the spread of the kernel samples over the receiver
 //! (Stamminger et al. 1997's sampling-based estimate; the largest sample when visibility is partial).
 //!

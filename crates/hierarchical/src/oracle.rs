@@ -1,4 +1,4 @@
-//! Refinement oracles and the choice of which end of a link to split (survey 2.4.1).
+//! Refinement oracles and the choice of which end of a link to split (Hanrahan, Salzman & Aupperle 1991; Stamminger et al. 1997).
 //!
 //! The estimate e of a link r ← s is, by [`Oracle`]:
 //!

@@ -1,5 +1,5 @@
 //! Parameters of hierarchical radiosity: the refinement threshold ε and its oracle, the schedule that
-//! interleaves refinement and solution (survey 2.4.3), the minimum element size, the transfer's quadrature and
+//! interleaves refinement and solution (Willmott 2000, §2.4.3), the minimum element size, the transfer's quadrature and
 //! visibility sampling, the solver tolerance and the output interpolation. Every choice is a typed enum
 //! (serde kebab-case), every field has a documented default, and [`HierarchicalParams::coarse`] and
 //! [`HierarchicalParams::reference`] are named presets.
@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 /// The default minimum element size as a fraction of the scene's bounding-box diagonal.
 pub const MIN_ELEMENT_SIZE_REL: f64 = 1.0 / 150.0;
 
-/// How a link's error is estimated (survey 2.4.1; Hanrahan, Salzman & Aupperle 1991; Stamminger et al. 1997).
+/// How a link's error is estimated (Hanrahan, Salzman & Aupperle 1991; Stamminger et al. 1997).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Oracle {
@@ -28,7 +28,7 @@ pub enum Oracle {
     Variation,
 }
 
-/// How link refinement and solution alternate (survey 2.4.3).
+/// How link refinement and solution alternate (Willmott 2000, §2.4.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Schedule {
@@ -44,7 +44,7 @@ pub enum Schedule {
     Scheduled,
 }
 
-/// How a leaf's irradiance is gathered from the links on its path to the root (survey 2.4.2).
+/// How a leaf's irradiance is gathered from the links on its path to the root (Hanrahan, Salzman & Aupperle 1991: gather, then push-pull).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Gather {

@@ -1,4 +1,4 @@
-//! Link creation and refinement (Hanrahan, Salzman & Aupperle 1991; survey 2.3.2 and 2.4.1).
+//! Link creation and refinement (Hanrahan, Salzman & Aupperle 1991).
 //!
 //! Initial links join every ordered pair of roots that can exchange light (for patches: input faces each
 //! partly in front of the other, with a non-zero transfer): the O(k²) start of classic hierarchical radiosity.

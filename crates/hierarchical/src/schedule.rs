@@ -1,4 +1,4 @@
-//! The three ways to interleave link refinement with solution (survey 2.4.3), driven one pass per step:
+//! The three ways to interleave link refinement with solution (as Willmott 2000, §2.4.3, classifies them), driven one pass per step:
 //!
 //! - two-stage: link all input faces, refine until no link changes (the oracle sees emission only), then
 //!   gather/push-pull until converged;

@@ -214,7 +214,7 @@ fn error_against_matrix_falls_as_epsilon_shrinks() {
 
 #[test]
 fn links_per_element_stay_bounded_as_elements_grow() {
-    // Survey 2.4.1: with the F oracle each element has at most about 1/ε links, however many elements there
+    // Hanrahan, Salzman & Aupperle 1991: with the F oracle each element has at most about 1/ε links, however many elements there
     // are. Fixed geometry and ε; a smaller minimum element size lets the mesh grow.
     let scene = shadow_box();
     let accel = Accel::new(&scene);
@@ -320,7 +320,7 @@ fn schedules_reach_the_same_answer() {
     // With the geometric oracle and α = 1 every schedule builds the same links (rays are drawn per pair of
     // elements, whatever order they were made in), so the answers agree to the solver's tolerance. With the
     // light-driven oracle, interleaved and scheduled refine from the solution and agree to a fraction of the
-    // method's error; two-stage sees emission only when it refines (survey 2.4.3) and is not compared.
+    // method's error; two-stage sees emission only when it refines (Willmott 2000, §2.4.3) and is not compared.
     let scene = shadow_box();
     let accel = Accel::new(&scene);
     let run = |schedule, oracle| {

@@ -5,7 +5,7 @@
 //! where each F_ij is the receiver-side quadrature of the exact point-to-polygon kernel over element i times a
 //! visibility fraction V_ij (Wallace, Elmquist & Haines 1989 split kernel and
 //! visibility the same way). The discrete equation is B_i = E_i + ρ_i Σ_j F'_ij B_j with F'_ij = G_ij / A_i
-//! (survey eq. 4 discretised with constant elements).
+//! (the radiosity equation of Goral et al. 1984 discretised with constant elements).
 //!
 //! Why this form: the quadratures A_i F_ij and A_j F_ji estimate the same quantity ∫∫ G V dA dA but differ by
 //! their quadrature errors, so the raw matrix is only approximately reciprocal. Averaging them makes

@@ -1,6 +1,6 @@
 //! # radlab-matrix: matrix radiosity
 //!
-//! The classic finite-element radiosity method (Goral et al. 1984; Cohen & Greenberg 1985; survey §2.3.1):
+//! The classic finite-element radiosity method (Goral et al. 1984; Cohen & Greenberg 1985):
 //! mesh every face into constant elements, compute the form factor between **every** pair of elements, and
 //! solve the linear system B_i = E_i + ρ_i Σ_j F_ij B_j per RGB channel. It is the reference point the
 //! progressive, hierarchical and clustering methods improve on: exact in its own discretisation, but
@@ -24,7 +24,7 @@
 //! - **Solution queries** (`reconstruction`, radlab_scene::reconstruction): `constant` answers B of the element
 //!   containing the point; `gouraud` interpolates vertex values (least-squares fits to the surrounding
 //!   elements) over each face's elements; `final-gather` recomputes B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j
-//!   from every element with the exact point-to-polygon factor and visibility rays (survey 2.5.3). The gather's
+//!   from every element with the exact point-to-polygon factor and visibility rays (Lischinski, Tampieri & Greenberg 1993). The gather's
 //!   rays and kernel evaluations are counted by [`MatrixSolver::gather_work`], not in `stats()`, which counts
 //!   solving: answering is charged by whoever asks, once per set of queries (the runner times each evaluation
 //!   pass and adds it to the run's time and rays). A gather costs one kernel evaluation and one to sixteen rays

@@ -2,7 +2,7 @@
 //!
 //! (I − ρF') B = E,   F'_ij = G_ij / A_i,
 //!
-//! with G the symmetric area-weighted matrix of [`crate::assembly`] (survey eq. 4 with constant elements), and
+//! with G the symmetric area-weighted matrix of [`crate::assembly`] (the radiosity equation of Goral et al. 1984 with constant elements), and
 //! the stopping rule shared by the three iterations. Norms are area-weighted L1, ‖v‖ = Σ_i A_i |v_i| per
 //! channel (the power norm, and the norm of radlab's error metric). Because A_i F'_ij = A_j F'_ji and rows sum
 //! to at most 1, ‖ρF'‖ ≤ ρ_max in this norm, so the error of any iterate is bounded by its residual:

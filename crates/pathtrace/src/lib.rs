@@ -42,8 +42,8 @@
 //! ## 3. Mesh-based Monte Carlo radiosity ([`McRadiositySolver`])
 //!
 //! A view-independent solution over a fixed element mesh (the same `element_size` meshing as matrix
-//! radiosity): particles shot from the emitters are tallied on the elements they land on (survey 2.2.4;
-//! Shirley 1991, Neumann et al. 1995, Bekaert 1999). Each `step()` shoots a batch; the solution is the mean over
+//! radiosity): particles shot from the emitters are tallied on the elements they land on
+//! (Shirley 1991, Neumann et al. 1995, Bekaert 1999). Each `step()` shoots a batch; the solution is the mean over
 //! all particles so far, unbiased for the given mesh, error ∝ 1/√particles; `stats().residual` is the
 //! estimated relative standard error.
 //!

@@ -1,4 +1,4 @@
-//! Mesh-based Monte Carlo radiosity (survey 2.2.4): a view-independent solution over a fixed element mesh,
+//! Mesh-based Monte Carlo radiosity (Shirley 1991; Neumann et al. 1995; Bekaert 1999): a view-independent solution over a fixed element mesh,
 //! estimated by particles shot from the emitters and deposited on the elements they hit, as a [`Solver`].
 //!
 //! The unknowns are those of the discretised radiosity system (Cohen & Wallace 1993, ch. 3), written for powers

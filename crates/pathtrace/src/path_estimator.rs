@@ -2,7 +2,7 @@
 //! here shares (the per-point reference and camera path tracing).
 //!
 //! Radiosity at x satisfies B(x) = E(x) + ρ(x) H(x), H(x) = ∫_Ω B(y(ω))/π cos θ_x dω over the hemisphere
-//! of x's normal (survey eq. 4 written over directions; B/π is the radiance of a diffuse surface). At each
+//! of x's normal (the radiosity equation written over directions, Kajiya 1986; B/π is the radiance of a diffuse surface). At each
 //! path vertex x_k, with throughput T_k:
 //!
 //! - **next-event estimation**: a point y on an emitter, area density p_A (emitter_sampling.rs), adds

@@ -54,7 +54,7 @@
 //! **Point answers** (`reconstruction`, radlab_scene::reconstruction): `constant` is the element's value (plus the
 //! ambient term when on); `gouraud` interpolates vertex values over each face's leaf elements, anchoring the
 //! T-vertices adaptive subdivision creates so the field stays continuous; `final-gather` recomputes
-//! B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j from every leaf element (survey 2.5.3). The data is rebuilt at the
+//! B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j from every leaf element (Lischinski, Tampieri & Greenberg 1993). The data is rebuilt at the
 //! first query after a step; a gather's rays and kernel evaluations are reported by
 //! [`ProgressiveSolver::gather_work`], not in `stats()` (answering is charged by whoever asks, per query pass).
 //!

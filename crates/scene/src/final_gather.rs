@@ -1,5 +1,5 @@
 //! Final gather: the radiosity at a query point recomputed from a finite-element solution by one more
-//! application of the radiosity equation (survey 2.5.3; Cohen & Wallace 1993, "Radiosity and Realistic Image
+//! application of the radiosity equation (Lischinski, Tampieri & Greenberg 1993; Cohen & Wallace 1993, "Radiosity and Realistic Image
 //! Synthesis", ch. 9; Lischinski, Tampieri & Greenberg 1993 use it for their displayed radiosity):
 //!
 //! B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j,

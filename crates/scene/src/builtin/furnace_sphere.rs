@@ -4,7 +4,7 @@
 //! varied shape to the furnace cube. The tessellation is the cube sphere of [`super::primitives`]:
 //! 12 n² triangles facing the centre.
 //!
-//! Concentric spheres (Christensen, Salesin & DeRose 1995/Christensen 1997, §8.3): a unit sphere facing out
+//! Concentric spheres (Christensen 1995, §8.3; Christensen et al. 1997): a unit sphere facing out
 //! inside a radius-2 sphere facing in, every triangle with the same ρ and E. A closed scene with uniform ρ and
 //! E is a furnace, so B = E/(1 − ρ) exactly at any face count k, which makes it the scaling scene for cluster
 //! methods: slope and error at once. Half the faces (to the nearest cube-sphere resolution) on each sphere.

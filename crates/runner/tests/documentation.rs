@@ -1,0 +1,104 @@
+//! The project's documentation resolves: every relative link in README.md and docs/*.md names a file that
+//! exists, and no source file cites design notes that are not in the repository (a reader of the code must be
+//! able to follow every citation: papers are cited by author and year, the project's own notes live in docs/).
+
+use std::path::{Path, PathBuf};
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The targets of the Markdown links `[text](target)` in `text` (anchors stripped), skipping URLs.
+fn link_targets(text: &str) -> Vec<String> {
+    let mut targets = Vec::new();
+    let mut rest = text;
+    while let Some(start) = rest.find("](") {
+        let after = &rest[start + 2..];
+        let Some(end) = after.find(')') else { break };
+        let target = after[..end].split('#').next().unwrap_or_default().trim();
+        if !target.is_empty() && !target.contains("://") {
+            targets.push(target.to_string());
+        }
+        rest = &after[end..];
+    }
+    targets
+}
+
+#[test]
+fn relative_links_in_the_readme_and_docs_resolve() {
+    let root = workspace_root();
+    let mut files = vec![root.join("README.md")];
+    let mut docs: Vec<PathBuf> = std::fs::read_dir(root.join("docs"))
+        .expect("docs/ exists")
+        .map(|e| e.expect("readable docs/ entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    docs.sort();
+    assert!(docs.len() >= 4, "docs/ holds the design notes: {docs:?}");
+    files.extend(docs);
+    let mut broken = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).expect("readable Markdown");
+        let dir = file.parent().expect("a file has a parent");
+        for target in link_targets(&text) {
+            if !dir.join(&target).exists() {
+                broken.push(format!("{}: {target}", file.display()));
+            }
+        }
+    }
+    assert!(broken.is_empty(), "links to missing files: {broken:#?}");
+}
+
+#[test]
+fn link_targets_are_parsed() {
+    assert_eq!(
+        link_targets("see [a](docs/a.md#x), [b](https://x.org/y) and ![c](img.png)"),
+        vec!["docs/a.md".to_string(), "img.png".to_string()]
+    );
+}
+
+/// Collects the `.rs` files under `dir`, skipping build output.
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("readable directory") {
+        let path = entry.expect("readable entry").path();
+        if path.is_dir() {
+            if path.file_name().is_some_and(|n| n != "target") {
+                rust_files(&path, out);
+            }
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn no_source_cites_notes_outside_the_repository() {
+    let mut files = Vec::new();
+    rust_files(&workspace_root().join("crates"), &mut files);
+    assert!(files.len() > 50, "found the sources: {}", files.len());
+    // Spelled in pieces so this file does not match itself.
+    let forbidden = [
+        ["sur", "vey §"].concat(),
+        ["sur", "vey 2."].concat(),
+        ["sur", "vey eq"].concat(),
+        ["ALGORITHMS", ".md"].concat(),
+        ["ARCHITECTURE", ".md"].concat(),
+        ["shared/", "design"].concat(),
+    ];
+    let mut hits = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).expect("readable source");
+        for (n, line) in text.lines().enumerate() {
+            let lower = line.to_lowercase();
+            for f in &forbidden {
+                if lower.contains(&f.to_lowercase()) {
+                    hits.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(
+        hits.is_empty(),
+        "citations a reader of the code cannot follow: {hits:#?}"
+    );
+}
