@@ -172,7 +172,7 @@ impl PatchKernel<'_> {
             self.seed,
             link_stream(kr, ks),
         );
-        if v.is_nan() || v <= 0.0 {
+        if v.is_nan() {
             return None;
         }
         let spread = if v < 1.0 { hi } else { hi - lo };

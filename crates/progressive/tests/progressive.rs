@@ -215,9 +215,14 @@ fn emitters_shoot_with_direct_visibility_and_the_rest_with_indirect() {
     let (b, rb) = solve(4, VisibilitySampling::Jittered8x8);
     assert_eq!(ra, rb);
     assert!(a.iter().zip(&b).all(|(x, y)| x.radiosity == y.radiosity));
-    let (a, ra) = solve(5, VisibilitySampling::Centre);
-    let (b, rb) = solve(5, VisibilitySampling::Jittered8x8);
+    let (_, ra) = solve(5, VisibilitySampling::Centre);
+    let (_, rb) = solve(5, VisibilitySampling::Jittered8x8);
     assert_eq!(rb - ra, 63 * (ra - solve(4, VisibilitySampling::Centre).1));
+    // Measured: centre and jittered visibility still agree through shot 8 (shooters 5–8 see each receiver's
+    // facing side either wholly or not at all; visibility counts only pairs that face each other), and differ
+    // from shot 9 on (106 of 1,088 elements after 9 shots, 210 after 11). Partial occlusion must show.
+    let (a, _) = solve(12, VisibilitySampling::Centre);
+    let (b, _) = solve(12, VisibilitySampling::Jittered8x8);
     assert!(a.iter().zip(&b).any(|(x, y)| x.radiosity != y.radiosity));
 }
 

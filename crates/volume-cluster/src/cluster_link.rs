@@ -23,7 +23,11 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{Link, NodeKind, link_stream};
-use radlab_scene::{Accel, FaceId, form_factor::VisibilitySampling, sampling};
+use radlab_scene::{
+    Accel, FaceId,
+    form_factor::{VisibilitySampling, pair_kernel},
+    sampling,
+};
 
 use crate::cluster_node::ClusterNode;
 
@@ -39,13 +43,14 @@ pub fn centroid_geometry(recv: DVec3, src: DVec3) -> (DVec3, f64) {
     (v.normalize_or_zero(), v.length_squared())
 }
 
-/// A point on the node's contents, its face and normal, looking toward `toward` if one of eight draws does.
+/// A point on the node's contents, its face and the face's normal, looking toward `toward` if one of eight
+/// draws does.
 pub(crate) fn sample_point(
     node: &ClusterNode<'_>,
     toward: DVec3,
     rng: &mut sampling::Rng,
-) -> (DVec3, FaceId) {
-    let mut last = (node.centroid(), 0);
+) -> (DVec3, FaceId, DVec3) {
+    let mut last = (node.centroid(), 0, DVec3::ZERO);
     for _ in 0..8 {
         let (u0, u1, u2) = (
             sampling::uniform(rng),
@@ -63,7 +68,7 @@ pub(crate) fn sample_point(
                 )
             }
         };
-        last = (p, f);
+        last = (p, f, n);
         if n.dot(toward - p) > 0.0 {
             break;
         }
@@ -110,20 +115,14 @@ pub fn cluster_link(
             let (a, b) = if kr <= ks { (recv, src) } else { (src, recv) };
             let mut rng = sampling::rng(seed, link_stream(kr, ks));
             let (ca, cb) = (a.centroid(), b.centroid());
-            let mut seen = 0;
-            for _ in 0..n {
-                let (p, fp) = sample_point(a, cb, &mut rng);
-                let (q, fq) = sample_point(b, ca, &mut rng);
-                if accel.visible_between(p, fp, q, fq) {
-                    seen += 1;
-                }
-            }
-            seen as f64 / n as f64
+            facing_fraction_visible(
+                accel,
+                n,
+                |rng| (sample_point(a, cb, rng), sample_point(b, ca, rng)),
+                &mut rng,
+            )
         }
     };
-    if v <= 0.0 {
-        return None;
-    }
     let pi_d2 = std::f64::consts::PI * d_min * d_min;
     let f_rs = (src.area() / pi_d2).min(1.0);
     let f_sr = (recv.area() / pi_d2).min(1.0);
@@ -154,13 +153,38 @@ pub fn face_visibility(
     };
     let mut rng = sampling::rng(seed, link_stream(target.key(), src.key()) ^ 0xFACE);
     let (ct, cs) = (target.centroid(), src.centroid());
-    let mut seen = 0;
+    facing_fraction_visible(
+        accel,
+        n,
+        |rng| (sample_point(target, cs, rng), sample_point(src, ct, rng)),
+        &mut rng,
+    )
+}
+
+/// A sampled point, its face and the face's normal.
+type PointOnFace = (DVec3, FaceId, DVec3);
+
+/// The kernel-weighted fraction of `n` sampled point pairs that see each other, Σ w v / Σ w with
+/// w = cos θ cos θ' / r² (radlab-scene's `pair_kernel`): the same estimator as the patches' visibility
+/// fraction, so a pair behind either face (zero kernel) is no sample of visibility and near-horizon pairs
+/// weigh what they carry. No facing pair gives 0.
+fn facing_fraction_visible(
+    accel: &Accel,
+    n: u32,
+    mut pair: impl FnMut(&mut sampling::Rng) -> (PointOnFace, PointOnFace),
+    rng: &mut sampling::Rng,
+) -> f64 {
+    let (mut seen, mut facing) = (0.0, 0.0);
     for _ in 0..n {
-        let (p, fp) = sample_point(target, cs, &mut rng);
-        let (q, fq) = sample_point(src, ct, &mut rng);
+        let ((p, fp, np), (q, fq, nq)) = pair(rng);
+        let w = pair_kernel(p, np, q, nq);
+        if w <= 0.0 {
+            continue;
+        }
+        facing += w;
         if accel.visible_between(p, fp, q, fq) {
-            seen += 1;
+            seen += w;
         }
     }
-    seen as f64 / n as f64
+    if facing > 0.0 { seen / facing } else { 0.0 }
 }

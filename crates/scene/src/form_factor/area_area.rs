@@ -17,6 +17,8 @@
 //! m = 1 is the centroid. Any rule's weights sum to 1, so in a closed convex enclosure the unoccluded row sums
 //! Σ_j F_ij are 1 to rounding, as they are for every receiver point.
 
+use glam::DVec3;
+
 use super::gauss_legendre;
 use crate::{Accel, FaceId, Polygon, sampling};
 
@@ -65,7 +67,13 @@ impl VisibilitySampling {
 /// The n × n jittered samples on each element are paired through a random permutation of the strata, drawn
 /// afresh for every call: each ray then joins two points distributed uniformly and independently over the
 /// elements (for triangles and parallelograms), so the fraction is an unbiased estimate of the fraction of
-/// point pairs that see each other, while the samples stay stratified on both elements.
+/// point pairs that see each other, while the samples stay stratified on both elements. Each pair is weighted
+/// by its kernel, w = cos θ cos θ' / r² ([`pair_kernel`]), so the estimate is the ratio estimator of the
+/// kernel-weighted visibility V = ∫∫ G v / ∫∫ G, the factor that turns the unoccluded form factor into the
+/// occluded one (Wallace, Elmquist & Haines 1989 weight their visibility samples by their form-factor share
+/// alike). An unweighted fraction biases V × F low wherever visibility and kernel are correlated: a pair behind
+/// either plane (zero kernel) would count as blocked, and near-horizon pairs (small kernel) are the ones a
+/// curved surface's own faces block. No facing pair among the samples gives 0.
 #[allow(clippy::too_many_arguments)]
 pub fn visibility_fraction(
     accel: &Accel,
@@ -99,20 +107,38 @@ pub fn visibility_fraction(
                 let j = ((sampling::uniform(&mut r) * (k + 1) as f64) as usize).min(k);
                 perm.swap(k, j);
             }
-            let mut seen = 0u32;
+            let (na, nb) = (a.normal(), b.normal());
+            let (mut seen, mut facing) = (0.0, 0.0);
             for (k, &m) in perm.iter().enumerate().take(total) {
                 let m = m as usize;
                 let u =
                     |x: usize, r: &mut sampling::Rng| (x as f64 + sampling::uniform(r)) / n as f64;
                 let x = a.point_at(u(k % n, &mut r), u(k / n, &mut r));
                 let y = b.point_at(u(m % n, &mut r), u(m / n, &mut r));
+                let w = pair_kernel(x, na, y, nb);
+                if w <= 0.0 {
+                    continue;
+                }
+                facing += w;
                 if accel.visible_between(x, fa, y, fb) {
-                    seen += 1;
+                    seen += w;
                 }
             }
-            seen as f64 / total as f64
+            if facing > 0.0 { seen / facing } else { 0.0 }
         }
     }
+}
+
+/// The point-to-point kernel cos θ cos θ' / r² between x (normal `nx`) and y (normal `ny`), zero unless each
+/// point is in front of the other's plane (π G of the radiosity equation).
+pub fn pair_kernel(x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> f64 {
+    let v = y - x;
+    let (cx, cy) = (nx.dot(v), -ny.dot(v));
+    if cx <= 0.0 || cy <= 0.0 {
+        return 0.0;
+    }
+    let r2 = v.length_squared();
+    cx * cy / (r2 * r2)
 }
 
 /// Unoccluded form factor from receiver polygon `recv` to the front of source `src`: the point-to-polygon
