@@ -182,16 +182,6 @@ const EXCEPTIONS: &[Exception] = &[
     },
     Exception {
         method: "face-cluster",
-        case: "boxes touching walls",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 1.6e-4 of the lit maximum (release, 2026-11-30); before touching clusters
-        // stopped exchanging point transfers the solve diverged here.
-        reason: "light reaches the closed interiors of boxes flush against walls: not yet diagnosed (volume-cluster \
-                 has the same symptom)",
-    },
-    Exception {
-        method: "face-cluster",
         case: "sliver (aspect 1e4) in a furnace",
         expect: Expect::Misses,
         overrides: &[],
