@@ -282,17 +282,6 @@ const EXCEPTIONS: &[Exception] = &[
     },
     Exception {
         method: "volume-cluster",
-        case: "boxes touching walls",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 3.0e-3 of the lit maximum (2026-11-30), after the coarse correction was restricted to lit
-        // leaves (which fixed the box 1e-6 above the floor: 4.7e-4 before, 0 after).
-        reason: "light reaches the interior of a box whose outer face is coplanar with a wall: suspected \
-                 visibility rays from the interior to wall points under the box, whose hit on the coplanar \
-                 box face falls in the end gap; not yet diagnosed",
-    },
-    Exception {
-        method: "volume-cluster",
         case: "sliver (aspect 1e4) in a furnace",
         expect: Expect::Misses,
         overrides: &[],

@@ -17,9 +17,10 @@
 //!   face looks toward the other end's centroid. Because the rays start and end on faces, occlusion inside
 //!   either cluster along the segment (a face behind another, seen from the other end) counts; what a one-
 //!   number visibility cannot express is which faces are shadowed: every face of a receiving cluster gets the
-//!   link's mean (Sillion & Drettakis 1995's "shelf of books" energy gain). The α transfer, which evaluates
-//!   a cluster link at each face below its receiver anyway, tests each face's own visibility there
-//!   ([`face_visibility`]), so light does not leak into closed interiors inside a receiving cluster.
+//!   link's mean (Sillion & Drettakis 1995's "shelf of books" energy gain), the α transfer included (its
+//!   faces get their own cosine and distance, not their own visibility). The product of a mean visibility and
+//!   a mean source flux can carry light into a sealed interior inside a receiving cluster; faces sealed off
+//!   from every emitter are found once and given no irradiance ([`crate::enclosure`]).
 
 use glam::DVec3;
 use radlab_hierarchical::{Link, NodeKind, link_stream};
@@ -137,30 +138,4 @@ pub fn cluster_link(
         overlap: false,
         clustered: true,
     })
-}
-
-/// The visibility of `src`'s contents from face patch `target` (a face below a receiving cluster): the fraction
-/// of max(1, rays/4) rays between points on the face and points on the source's faces that arrive.
-pub fn face_visibility(
-    accel: &Accel,
-    visibility: VisibilitySampling,
-    seed: u64,
-    target: &ClusterNode<'_>,
-    src: &ClusterNode<'_>,
-) -> f64 {
-    let n = match visibility.rays() {
-        0 => return 1.0,
-        r => (r / 4).max(1),
-    };
-    let mut rng = sampling::rng(seed, link_stream(target.key(), src.key()) ^ 0xFACE);
-    let (ct, cs) = (target.centroid(), src.centroid());
-    let mut seen = 0;
-    for _ in 0..n {
-        let (p, fp) = sample_point(target, cs, &mut rng);
-        let (q, fq) = sample_point(src, ct, &mut rng);
-        if accel.visible_between(p, fp, q, fq) {
-            seen += 1;
-        }
-    }
-    seen as f64 / n as f64
 }
