@@ -12,14 +12,16 @@
 //!   every cosine ≤ 1 gives F_rs ≤ A_s/(π d_min²) and F_sr ≤ A_r/(π d_min²) (each capped at 1); these stand in
 //!   for the patch links' form factors in the `f`, `bf` and `variation` oracles, so a link is refined until the
 //!   bound on the power it carries, ρ_r B_s A_r F_rs relative to the scene's, is below ε.
-//! - Visibility: rays between points on the faces of the two ends, never between empty box corners. A point
+//! - Visibility: rays between points on the faces of the two ends, never between empty box corners, each pair
+//!   weighted by its kernel cos θ cos θ'/r² as for patches (a pair behind either face weighs nothing). A point
 //!   on a cluster is drawn area-proportionally among its faces (O(log k)), redrawn up to eight times until its
 //!   face looks toward the other end's centroid. Because the rays start and end on faces, occlusion inside
 //!   either cluster along the segment (a face behind another, seen from the other end) counts; what a one-
 //!   number visibility cannot express is which faces are shadowed: every face of a receiving cluster gets the
-//!   link's mean (Sillion & Drettakis 1995's "shelf of books" energy gain). The α transfer, which evaluates
-//!   a cluster link at each face below its receiver anyway, tests each face's own visibility there
-//!   ([`face_visibility`]), so light does not leak into closed interiors inside a receiving cluster.
+//!   link's mean (Sillion & Drettakis 1995's "shelf of books" energy gain), the α transfer included (its
+//!   faces get their own cosine and distance, not their own visibility). The product of a mean visibility and
+//!   a mean source flux can carry light into a sealed interior inside a receiving cluster; faces sealed off
+//!   from every emitter are found once and given no irradiance ([`crate::enclosure`]).
 
 use glam::DVec3;
 use radlab_hierarchical::{Link, NodeKind, link_stream};
@@ -137,30 +139,6 @@ pub fn cluster_link(
         clustered: true,
     })
 }
-
-/// The visibility of `src`'s contents from face patch `target` (a face below a receiving cluster): the fraction
-/// of max(1, rays/4) rays between points on the face and points on the source's faces that arrive.
-pub fn face_visibility(
-    accel: &Accel,
-    visibility: VisibilitySampling,
-    seed: u64,
-    target: &ClusterNode<'_>,
-    src: &ClusterNode<'_>,
-) -> f64 {
-    let n = match visibility.rays() {
-        0 => return 1.0,
-        r => (r / 4).max(1),
-    };
-    let mut rng = sampling::rng(seed, link_stream(target.key(), src.key()) ^ 0xFACE);
-    let (ct, cs) = (target.centroid(), src.centroid());
-    facing_fraction_visible(
-        accel,
-        n,
-        |rng| (sample_point(target, cs, rng), sample_point(src, ct, rng)),
-        &mut rng,
-    )
-}
-
 /// A sampled point, its face and the face's normal.
 type PointOnFace = (DVec3, FaceId, DVec3);
 

@@ -43,11 +43,15 @@
 //! - `isotropic` loses energy wherever clusters are flat-ish (a cap of a sphere seen face-on is a quarter of
 //!   its true projected area at each end).
 //! - Occlusion inside a cluster is averaged into one number per link (Sillion & Drettakis 1995) for
-//!   `isotropic` and `directional`; `alpha` tests each receiving face's own visibility.
+//!   every transfer (`alpha` gives each receiving face its own cosine and distance, not its own visibility).
+//!   A mean visibility times a mean source flux could carry light through walls into sealed interiors inside a
+//!   receiving cluster; faces sealed off from every emitter are found once by 16 rays per face
+//!   ([`enclosure`]) and receive nothing.
 
 mod cluster_link;
 mod cluster_node;
 mod cluster_transport;
+pub mod enclosure;
 pub mod loose_octree;
 mod params;
 mod solver;

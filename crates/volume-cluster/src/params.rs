@@ -63,7 +63,20 @@ impl MethodParams for VolumeClusterParams {
         d.extend(
             HierarchicalParams::docs()
                 .into_iter()
-                .filter(|(k, _)| *k != "lazy_linking"),
+                .filter(|(k, _)| *k != "lazy_linking")
+                .map(|(k, v)| match k {
+                    "epsilon" => (
+                        k,
+                        "refinement threshold: the largest power a link may carry unresolved, as a fraction of \
+                         the scene's (default 1e-4)",
+                    ),
+                    "error_norm" => (
+                        k,
+                        "power (default: a link's estimate times its receiver's share of the scene's area) | \
+                         radiosity (irradiance relative to the mean; drives links down to every face)",
+                    ),
+                    _ => (k, v),
+                }),
         );
         d
     }
@@ -76,11 +89,14 @@ impl MethodParams for VolumeClusterParams {
         let transfer = toml::Value::try_from(Transfer::default())
             .map_or_else(|_| String::new(), |v| v.to_string());
         let mut v = vec![("transfer".to_string(), transfer)];
-        v.extend(
-            HierarchicalParams::default_values()
-                .into_iter()
-                .filter(|(k, _)| k != "lazy_linking"),
-        );
+        // This method's own engine defaults (ε and the error norm differ from hierarchical's).
+        if let Ok(toml::Value::Table(t)) = toml::Value::try_from(Self::default().engine) {
+            v.extend(
+                t.into_iter()
+                    .filter(|(k, _)| k != "lazy_linking")
+                    .map(|(k, x)| (k, x.to_string())),
+            );
+        }
         v
     }
 
@@ -143,6 +159,21 @@ mod tests {
                 .to_string();
             assert!(e.contains(k), "{k}={v}: {e}");
         }
+        let defaults = VolumeClusterParams::default_values();
+        let eps = defaults
+            .iter()
+            .find(|(k, _)| k == "epsilon")
+            .map(|(_, v)| v.as_str());
+        assert_eq!(
+            eps,
+            Some(&*DEFAULT_EPSILON.to_string()),
+            "listed epsilon default"
+        );
+        let norm = defaults
+            .iter()
+            .find(|(k, _)| k == "error_norm")
+            .map(|(_, v)| v.as_str());
+        assert_eq!(norm, Some("\"power\""), "listed error_norm default");
         let names: Vec<&str> = VolumeClusterParams::docs().iter().map(|d| d.0).collect();
         for (k, _) in VolumeClusterParams::default_values() {
             assert!(names.contains(&k.as_str()), "{k} undocumented");

@@ -68,13 +68,15 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         let p = params.engine.clone();
         let min_size = p.resolve_min_size(scene)?;
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
-        let transport = ClusterTransport::new(patches, accel, p.visibility, seed);
+        let before = accel.rays_cast();
+        let reachable = crate::enclosure::reachable_faces(scene, accel, seed);
+        let transport = ClusterTransport::new(patches, accel, p.visibility, p.quadrature, seed)
+            .with_reachable(reachable);
         let output = SurfaceOutput::new(p.reconstruction, seed);
         let n_roots = roots.len() as u32;
         let mut engine = Engine::new(roots, transport, p, min_size)?;
         engine.expand(|n| matches!(n, ClusterNode::Cluster(_)))?;
         engine.skip_initial_links();
-        let before = accel.rays_cast();
         for &(r, s) in first_links {
             if r >= n_roots || s >= n_roots {
                 return Err(SolveError::param(

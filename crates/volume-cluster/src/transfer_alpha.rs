@@ -2,9 +2,9 @@
 //! clusters): a cluster source radiates the intensity Σ_i B_i A_i max(0, n_i·d)/π of its faces toward the
 //! receiver, J = Σ_i A_i max(0, n_i·d) B_i, summed over its input faces at every pass; a cluster receiver hands
 //! each contained face j its own share, H_j = V J max(0, n_j·(−d_j))/(π r_j²) (d_j, r_j from the source's
-//! centroid to the face's) and V_j the face's own visibility of the source (max(1, rays/4) rays from the
-//! face), evaluated once per (face, link) and cached. O(faces) per link: O(k log k + n) overall, and every
-//! input face below a cluster link is touched at every pass.
+//! centroid to the face's; V the link's visibility), evaluated once per (face, link) and cached; faces sealed
+//! off from every emitter get nothing ([`crate::enclosure`]). O(faces) per link and no rays below the link:
+//! O(k log k + n) overall, and every input face below a cluster link is touched at every pass.
 
 use glam::DVec3;
 use radlab_hierarchical::{GatherAt, NodeKind, NodeView};
