@@ -29,8 +29,13 @@
 //! tree nodes ([`FaceNode::Cluster`]) and, below a tree leaf, quadtree patches of its face
 //! ([`FaceNode::Patch`]); light moves by [`VectorTransport`] (irradiance vectors e and power vectors
 //! p = Σ B_i A_i n_i per channel, p = p_E + M e at cluster leaves, the exact patch kernel between two patches).
-//! First links: every ordered pair of the tree's roots and the self-link of each concave root (no volume
-//! hierarchy above the roots yet: a scene of many separate parts starts with (roots)² links). Parameters: those of
+//! Above the tree's roots, a loose octree of volumes (Christensen et al. 1997) over the roots' boxes; the solve
+//! starts from the top volume's self-link, refined like a volume cluster's (Sillion 1995), so a scene of many
+//! separate parts does not start from (roots)² links. A volume is a closed group of surfaces (Σ A_i n_i ≈ 0),
+//! so its links use Sillion's isotropic transfer (projected area A/4 toward every direction, radiosity from
+//! the engine's pulled area mean) rather than power vectors; the α alternative (Σ over the roots of
+//! max(0, p_root·d)) would cost a pass over the roots below a volume per link and pass, and the oracle splits
+//! volume links until their bound is below ε anyway. Parameters: those of
 //! `hierarchical` (`lazy_linking` excepted) with `error_norm = power` and `epsilon = 1e-4` by default.
 //! Refinement, gather and push-pull never read an input face unless a link is refined below a tree leaf
 //! ([`FaceClusterSolver::face_reads`] counts the faces read); radiosity at a point comes from the deepest node
@@ -73,6 +78,6 @@ pub use error::FaceClusterError;
 pub use face_node::{ClusterRef, FaceContext, FaceNode};
 pub use moments::{Moments, SymMat3};
 pub use params::FaceClusterParams;
-pub use solver::{DEFAULT_EPSILON, FaceClusterSolveParams, FaceClusterSolver};
+pub use solver::{DEFAULT_CACHE_DIR, DEFAULT_EPSILON, FaceClusterSolveParams, FaceClusterSolver};
 pub use tree::{FaceClusterTree, Node};
 pub use vector_transport::VectorTransport;

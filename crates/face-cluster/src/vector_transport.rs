@@ -36,7 +36,7 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{GatherAt, Link, NodeKind, NodeView, PatchKernel, Transport};
-use radlab_scene::{Accel, Rgb, form_factor::VisibilitySampling};
+use radlab_scene::{Accel, Ray, Rgb, form_factor::VisibilitySampling};
 
 use crate::bounds::angle_between;
 use crate::face_node::FaceNode;
@@ -88,10 +88,53 @@ impl<'a> VectorTransport<'a> {
         let seen = (0..n)
             .filter(|&i| {
                 let (p, q) = (pa[i % pa.len()], pb[(i / pa.len() + i) % pb.len()]);
-                self.accel.visible(p, q)
+                self.visible_past_ends(p, q, a, b)
             })
             .count();
         seen as f64 / n as f64
+    }
+}
+
+/// Most surfaces a visibility ray passes through its own ends before it counts as blocked (beyond this the
+/// segment is taken as blocked).
+const MAX_END_CROSSINGS: usize = 32;
+
+impl VectorTransport<'_> {
+    /// Whether the segment p → q between sample points of ends `a` and `b` is unobstructed by anything but
+    /// the ends themselves. A point transfer already counts which of an end's faces face the other end (its
+    /// power vector, or A/4 for a volume), so an end's own surfaces must not occlude its rays: a sample point
+    /// on the far side of a closed part would otherwise hide the whole part.
+    fn visible_past_ends(&self, p: DVec3, q: DVec3, a: &FaceNode<'_>, b: &FaceNode<'_>) -> bool {
+        let len = (q - p).length();
+        if !(len > 0.0 && len.is_finite()) {
+            return true;
+        }
+        let dir = (q - p) / len;
+        let mut hit = self.accel.intersect(&Ray {
+            origin: p,
+            dir,
+            tmax: len,
+        });
+        for _ in 0..MAX_END_CROSSINGS {
+            let Some(h) = hit else {
+                return true;
+            };
+            // Ends touched at q itself never occlude (as in Accel::visible).
+            if h.t >= len * (1.0 - 1e-9) {
+                return true;
+            }
+            if !(a.holds(h.face) || b.holds(h.face)) {
+                return false;
+            }
+            hit = self
+                .accel
+                .intersect_from(h.face, h.point, dir)
+                .map(|mut h2| {
+                    h2.t += h.t;
+                    h2
+                });
+        }
+        false
     }
 }
 
@@ -107,6 +150,19 @@ fn bound_only(src_id: u32, f_rs: f64, f_sr: f64) -> Link {
         overlap: false,
         clustered: true,
     }
+}
+
+/// Whether `flat` has one orientation and all of `other` lies behind or in its plane, so that nothing passes
+/// between them (coplanar parts, such as tiles of one floor, would otherwise touch and be refined to their
+/// faces). `size` scales the tolerance of "in the plane".
+fn behind_flat(flat: &FaceNode<'_>, other: &FaceNode<'_>, size: f64) -> bool {
+    let cone = flat.cone();
+    if flat.is_volume() || cone.half_angle >= FLAT_CONE {
+        return false;
+    }
+    let (n, c) = (cone.axis, flat.centroid());
+    let tol = 1e-9 * (size + flat.bound().radius);
+    other.hull().iter().all(|p| n.dot(*p - c) <= tol)
 }
 
 /// Direction and squared distance from `src` to `recv` centroids.
@@ -144,6 +200,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             return self.patches.patch_link(r, s, src_id);
         }
         if recv_id == src_id {
+            if recv.is_volume() {
+                // A volume's self-link carries nothing: it is refined into its children's links.
+                return Some(Link::overlapping(src_id));
+            }
             let theta = recv.cone().half_angle;
             if theta < FLAT_CONE || !recv.sees_itself() {
                 return None;
@@ -154,10 +214,18 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             return Some(l);
         }
         let (rb, sb) = (recv.bound(), src.bound());
+        if behind_flat(recv, src, sb.radius) || behind_flat(src, recv, rb.radius) {
+            return None;
+        }
         let between = rb.centre - sb.centre;
         let dist = between.length();
         let (ar, as_) = (recv.area(), src.area());
+        let volume_end = recv.is_volume() || src.is_volume();
         if dist <= rb.radius + sb.radius {
+            if volume_end {
+                // A volume and something within its box: refined until the ends are apart (Sillion 1995).
+                return Some(Link::overlapping(src_id));
+            }
             if !(ar > 0.0 && as_ > 0.0) {
                 return None;
             }
@@ -169,12 +237,22 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
         let d_c = between / dist;
         let spread = ((rb.radius + sb.radius) / dist).min(1.0).asin();
-        let (cr, cs) = (recv.cone(), src.cone());
-        let (alpha_s, alpha_r) = (angle_between(cs.axis, d_c), angle_between(cr.axis, -d_c));
+        // Per end: whether nothing of it faces the other, and whether some face might see the link from
+        // behind. A volume is isotropic: neither.
+        let facing = |n: &FaceNode<'a>, toward: DVec3| -> (bool, bool) {
+            if n.is_volume() {
+                return (false, false);
+            }
+            let c = n.cone();
+            let alpha = angle_between(c.axis, toward);
+            (
+                alpha - c.half_angle - spread >= HALF_PI,
+                alpha + c.half_angle + spread > HALF_PI,
+            )
+        };
+        let ((away_s, straddle_s), (away_r, straddle_r)) = (facing(src, d_c), facing(recv, -d_c));
         // Nothing of one end faces the other.
-        if alpha_s - cs.half_angle - spread >= HALF_PI
-            || alpha_r - cr.half_angle - spread >= HALF_PI
-        {
+        if away_s || away_r {
             return None;
         }
         let (_, r2) = centroid_geometry(recv.centroid(), src.centroid());
@@ -186,8 +264,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         let (f_rs, f_sr) = ((as_ / pi_g2).min(1.0), (ar / pi_g2).min(1.0));
         // Some face of an end might see the link from behind: the vector form does not hold; split, unless
         // the link's geometric estimate is already below the final ε (then its error is too).
-        if alpha_s + cs.half_angle + spread > HALF_PI || alpha_r + cr.half_angle + spread > HALF_PI
-        {
+        if straddle_s || straddle_r {
             let norm = if self.norm_area > 0.0 {
                 ar / self.norm_area
             } else {
@@ -252,6 +329,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         if !link.clustered || link.source == recv {
             return b[s];
         }
+        if view.nodes[s].is_volume() {
+            // An isotropic source: projected area A/4 toward every direction (Sillion 1995).
+            return b[s] * (0.25 * view.nodes[s].area());
+        }
         let (d, _) = centroid_geometry(
             view.nodes[recv as usize].centroid(),
             view.nodes[s].centroid(),
@@ -276,6 +357,22 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         with_emission: bool,
     ) -> (Rgb, [DVec3; 3]) {
         match leaf {
+            FaceNode::Volume(_) => {
+                // An isotropic receiver: its faces' mean irradiance is |e|/4; it sends as a volume (from its
+                // radiosity), so no power vector.
+                let e = if with_emission {
+                    leaf.emission()
+                } else {
+                    Rgb::ZERO
+                };
+                let rho = leaf.reflectance();
+                let b = Rgb::new(
+                    e[0] + 0.25 * rho[0] * h[0].length(),
+                    e[1] + 0.25 * rho[1] * h[1].length(),
+                    e[2] + 0.25 * rho[2] * h[2].length(),
+                );
+                (b, [DVec3::ZERO; 3])
+            }
             FaceNode::Patch(p) => {
                 let e = if with_emission { p.emission } else { Rgb::ZERO };
                 let b = Rgb::new(
@@ -316,6 +413,8 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
 
     fn uniform_response(&self, leaf: &FaceNode<'a>) -> (Rgb, [DVec3; 3]) {
         match leaf {
+            // Unit irradiance from every direction: B = ρ.
+            FaceNode::Volume(_) => (leaf.reflectance(), [DVec3::ZERO; 3]),
             FaceNode::Patch(p) => (
                 p.reflectance,
                 std::array::from_fn(|k| p.normal * (p.reflectance[k] * p.area)),
