@@ -17,7 +17,7 @@ use radlab_scene::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::face_node::{ClusterRef, FaceContext, FaceNode};
+use crate::face_node::{FaceContext, FaceNode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
 
