@@ -165,6 +165,11 @@ impl<'a> FaceContext<'a> {
         self.face_reads.load(Ordering::Relaxed)
     }
 
+    /// Counts one input face read by the solve.
+    pub(crate) fn count_face_read(&self) {
+        self.face_reads.fetch_add(1, Ordering::Relaxed);
+    }
+
     /// Approximate heap bytes held (the tree and the volumes included).
     pub fn bytes(&self) -> usize {
         self.tree.bytes()

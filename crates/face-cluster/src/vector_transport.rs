@@ -36,10 +36,18 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{GatherAt, Link, NodeKind, NodeView, PatchKernel, Transport};
-use radlab_scene::{Accel, Ray, Rgb, form_factor::VisibilitySampling};
+use radlab_scene::{
+    Accel, Polygon, Ray, Rgb,
+    form_factor::{VisibilitySampling, point_polygon_vector},
+};
 
 use crate::bounds::angle_between;
 use crate::face_node::FaceNode;
+
+/// A single-face source is near when its bounding radius exceeds this fraction of the distance between the
+/// two ends' centres: there the point form's relative error, of order (R/r)², would pass 1%, and the link
+/// uses the face's exact irradiance vector instead.
+pub const NEAR: f64 = 0.1;
 
 /// Normal-cone half-angle (radians) below which a node is flat: rounding, not curvature, and no self-link.
 pub const FLAT_CONE: f64 = 1e-6;
@@ -95,11 +103,75 @@ impl<'a> VectorTransport<'a> {
     }
 }
 
+/// The polygon of a single-face source: a patch, or a tree leaf (reading its face, counted as a face read).
+fn source_polygon(src: &FaceNode<'_>) -> Option<Polygon> {
+    match src {
+        FaceNode::Patch(p) => Some(p.polygon),
+        FaceNode::Cluster(c) if c.node().is_leaf() => {
+            let f = c.ctx.tree.faces_of(c.id as usize)[0] as usize;
+            c.ctx.count_face_read();
+            Some(c.ctx.scene.polygon(f))
+        }
+        _ => None,
+    }
+}
+
 /// Most surfaces a visibility ray passes through its own ends before it counts as blocked (beyond this the
 /// segment is taken as blocked).
 const MAX_END_CROSSINGS: usize = 32;
 
 impl VectorTransport<'_> {
+    /// The link from a near single-face source to a flat receiver, whose every face has the whole source
+    /// above its plane: the source's exact irradiance vector at the receiver's centroid per unit radiosity,
+    /// Φ(c_R) = (1/2π) Σ_edges Θ_e û_e (Arvo 1994), so that each receiving face gets n·Φ B_S, the exact
+    /// point-to-polygon factor (Baum, Rushmeier & Winget 1989, eq. 3) times the source's radiosity.
+    /// `None` when the link is not of that kind; `Some(None)` when nothing is transferred.
+    fn near_face_link(
+        &self,
+        recv: &FaceNode<'_>,
+        src: &FaceNode<'_>,
+        src_id: u32,
+    ) -> Option<Option<Link>> {
+        if recv.is_volume() || recv.as_patch().is_some() || src.area() <= 0.0 {
+            return None;
+        }
+        let cone = recv.cone();
+        let (rb, sb) = (recv.bound(), src.bound());
+        let dist = (rb.centre - sb.centre).length();
+        let single = match src {
+            FaceNode::Patch(_) => true,
+            FaceNode::Cluster(c) => c.node().is_leaf(),
+            FaceNode::Volume(_) => false,
+        };
+        if !single || cone.half_angle >= FLAT_CONE || sb.radius <= NEAR * dist {
+            return None;
+        }
+        let poly = source_polygon(src)?;
+        let (n, c) = (cone.axis, recv.centroid());
+        // The whole source above the receiver's plane: no receiving face clips it.
+        if poly.vertices().iter().any(|v| n.dot(*v - c) <= 0.0) {
+            return None;
+        }
+        let f = n.dot(point_polygon_vector(c, &poly));
+        if f <= 0.0 {
+            return Some(None);
+        }
+        let v = self.visibility(recv, src);
+        if v <= 0.0 {
+            return Some(None);
+        }
+        Some(Some(Link {
+            source: src_id,
+            coefficient: v,
+            f_recv: f as f32,
+            f_src: (f * recv.area() / src.area()).min(1.0) as f32,
+            spread: f as f32,
+            visibility: v as f32,
+            overlap: false,
+            clustered: false,
+        }))
+    }
+
     /// Whether the segment p → q between sample points of ends `a` and `b` is unobstructed by anything but
     /// the ends themselves. A point transfer already counts which of an end's faces face the other end (its
     /// power vector, or A/4 for a volume), so an end's own surfaces must not occlude its rays: a sample point
@@ -217,6 +289,9 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         if behind_flat(recv, src, sb.radius) || behind_flat(src, recv, rb.radius) {
             return None;
         }
+        if let Some(l) = self.near_face_link(recv, src, src_id) {
+            return l;
+        }
         let between = rb.centre - sb.centre;
         let dist = between.length();
         let (ar, as_) = (recv.area(), src.area());
@@ -304,10 +379,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         link: &Link,
         at_receiver: bool,
     ) -> DVec3 {
-        if !link.clustered
-            && let (FaceNode::Patch(t), FaceNode::Patch(s)) = (target, src)
-        {
-            return t.normal * self.patches.patch_coefficient(t, s, link, at_receiver);
+        if !link.clustered {
+            if let (FaceNode::Patch(t), FaceNode::Patch(s)) = (target, src) {
+                return t.normal * self.patches.patch_coefficient(t, s, link, at_receiver);
+            }
+            // A near single-face source: its exact irradiance vector times the link's visibility.
+            if let Some(poly) = source_polygon(src) {
+                return point_polygon_vector(target.centroid(), &poly) * link.coefficient;
+            }
         }
         if target.key() == src.key() {
             // A self-link: the cap's share f of its own mean radiosity, along its axis.

@@ -11,4 +11,4 @@ pub use area_area::{
     VisibilitySampling, polygon_polygon, polygon_polygon_unoccluded, visibility_fraction,
 };
 pub use estimate::form_factor_estimate;
-pub use point_polygon::{point_polygon, point_polygon_unclipped};
+pub use point_polygon::{point_polygon, point_polygon_unclipped, point_polygon_vector};
