@@ -79,6 +79,18 @@ fn params(pairs: &[(&str, &str)]) -> FaceClusterSolveParams {
     FaceClusterSolveParams::from_pairs(&pairs).expect("valid parameters")
 }
 
+/// Checks that the solve starts from the top volume's self-link, then solves to the end.
+fn solve_from_one_link(s: &mut FaceClusterSolver<'_>) {
+    assert_eq!(s.engine().link_count(), 1, "the top volume's self-link");
+    assert!(matches!(s.engine().nodes()[0], FaceNode::Volume(_)));
+    for _ in 0..500 {
+        if s.step().expect("step") != Step::Continue {
+            return;
+        }
+    }
+    panic!("no convergence in 500 steps");
+}
+
 /// `n` × `n` unit-spaced tiles (0.5 × 0.5, two triangles each, facing up, ρ = 0.5) in the plane z = 0 and a
 /// 2 × 2 light (E = 10) at height 10 over their middle, facing down: n² + 1 separate parts.
 fn tiles_under_a_light(n: usize) -> Scene {
@@ -127,13 +139,7 @@ fn many_parts_start_from_one_link() {
     let mut s = FaceClusterSolver::new(&scene, &accel, p, 3).expect("solver");
     let roots = s.context().tree.roots().len();
     assert_eq!(roots, n * n + 1);
-    assert_eq!(s.engine().link_count(), 1, "the top volume's self-link");
-    assert!(matches!(s.engine().nodes()[0], FaceNode::Volume(_)));
-    let mut steps = 0;
-    while s.step().expect("step") == Step::Continue {
-        steps += 1;
-        assert!(steps < 500, "no convergence");
-    }
+    solve_from_one_link(&mut s);
     let links = s.engine().link_count();
     // The light is one large face, split into patches where it is the larger end of a link: that read does
     // not grow with the number of tiles.
@@ -173,13 +179,7 @@ fn room_of_cubes_furnace() {
     let p = params(&[("epsilon", "0.001"), ("visibility", "centre")]);
     let mut s = FaceClusterSolver::new(&scene, &accel, p, 3).expect("solver");
     assert_eq!(s.context().tree.roots().len(), 65);
-    assert_eq!(s.engine().link_count(), 1, "the top volume's self-link");
-    assert!(matches!(s.engine().nodes()[0], FaceNode::Volume(_)));
-    let mut steps = 0;
-    while s.step().expect("step") == Step::Continue {
-        steps += 1;
-        assert!(steps < 500, "no convergence");
-    }
+    solve_from_one_link(&mut s);
     let links = s.engine().link_count();
     let fr = s.face_radiosity();
     let total: f64 = fr.iter().map(|x| x.1).sum();
