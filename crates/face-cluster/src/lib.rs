@@ -28,26 +28,36 @@
 //! Vector radiosity (Willmott et al. 1999, section 4) on radlab-hierarchical's generic engine: nodes are
 //! tree nodes ([`FaceNode::Cluster`]) and, below a tree leaf, quadtree patches of its face
 //! ([`FaceNode::Patch`]); light moves by [`VectorTransport`] (irradiance vectors e and power vectors
-//! p = Σ B_i A_i n_i per channel, p = p_E + M e at cluster leaves, the exact patch kernel between two patches).
-//! First links: every ordered pair of the tree's roots and the self-link of each concave root (no volume
-//! hierarchy above the roots yet: a scene of many separate parts starts with (roots)² links). Parameters: those of
+//! p = Σ B_i A_i n_i per channel, p = p_E + M e at cluster leaves, the exact patch kernel between two patches,
+//! and a near single-face source's exact polygon irradiance vector at a flat receiver).
+//! Above the tree's roots, a loose octree of volumes (Christensen et al. 1997) over the roots' boxes; the solve
+//! starts from the top volume's self-link, refined like a volume cluster's (Sillion 1995), so a scene of many
+//! separate parts does not start from (roots)² links. A volume is a closed group of surfaces (Σ A_i n_i ≈ 0),
+//! so its links use Sillion's isotropic transfer (projected area A/4 toward every direction, radiosity from
+//! the engine's pulled area mean) rather than power vectors; the α alternative (Σ over the roots of
+//! max(0, p_root·d)) would cost a pass over the roots below a volume per link and pass, and the oracle splits
+//! volume links until their bound is below ε anyway. Parameters: those of
 //! `hierarchical` (`lazy_linking` excepted) with `error_norm = power` and `epsilon = 1e-4` by default.
 //! Refinement, gather and push-pull never read an input face unless a link is refined below a tree leaf
 //! ([`FaceClusterSolver::face_reads`] counts the faces read); radiosity at a point comes from the deepest node
 //! holding its face.
 //!
-//! Measured (release, 2 threads on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
+//! Measured before the volume hierarchy above the roots and the near-source vectors existed (release, 2 threads
+//! on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
 //! solve wall time and links against k at the defaults: concentric spheres 1e3 → 1e4 → 1e5 faces:
 //! 0.94 → 2.30 → 5.67 s (slope 0.39 per decade), 156k → 285k → 384k links (slopes 0.26, 0.13); bumpy
 //! sphere: 0.43 → 0.65 → 0.89 s (slopes 0.18, 0.14), 48k → 59k → 59k links.
 //!
 //! Where the solve does badly (measured on concentric spheres, a furnace with B = E/(1 − ρ)):
 //! - It loses energy: the area mean is 4.4% low at 1,000 faces, 1.5% at 10⁴ and 1.4% at 10⁵ (ρ = 0.5), and the
-//!   loss is amplified by 1/(1 − ρ): at 10⁴ faces 10% low at ρ = 0.9 and 56% at 0.99. Suspected cause: links
-//!   kept below the final ε although their ends' normal cones straddle the link direction (p·d then
-//!   under-counts Σ A_i max(0, n_i·d) B_i), and touching clusters kept below ε exchange nothing. Refusing
-//!   such links down to ε/100 instead of ε gave 2.001 at 10⁴ faces, with 14 times the links and 18 times the
-//!   time (measured once, not a parameter yet).
+//!   loss is amplified by 1/(1 − ρ): at 10⁴ faces 10% low at ρ = 0.9 and 56% at 0.99. Measured cause (600 faces, ε = 1e-3, 1.936
+//!   instead of 2): links kept below ε although an end's normal cone straddles the link direction (p·d and
+//!   M e then count faces that see the link from behind, negatively). Refusing those down to ε/100 at both ends
+//!   gives 1.980 with 4 times the links; also refining touching clusters' no-transfer links to ε/100, 1.988; a
+//!   0.5% floor remains (see the ignored furnace test).
+//! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 29% low with one visibility ray per link, 18% with
+//!   16 rays and 5% unoccluded (the ignored `room_of_cubes_furnace` test): visibility between closed parts is
+//!   most of it, not yet diagnosed.
 //! - The conformance suite's sliver and fan in a furnace are 54% off, and light reaches closed boxes flush
 //!   against walls (1.6e-4 of the lit maximum); not yet diagnosed.
 //!
@@ -73,6 +83,6 @@ pub use error::FaceClusterError;
 pub use face_node::{ClusterRef, FaceContext, FaceNode};
 pub use moments::{Moments, SymMat3};
 pub use params::FaceClusterParams;
-pub use solver::{DEFAULT_EPSILON, FaceClusterSolveParams, FaceClusterSolver};
+pub use solver::{DEFAULT_CACHE_DIR, DEFAULT_EPSILON, FaceClusterSolveParams, FaceClusterSolver};
 pub use tree::{FaceClusterTree, Node};
 pub use vector_transport::VectorTransport;

@@ -1,7 +1,8 @@
 //! [`FaceClusterSolver`]: face cluster radiosity (Willmott, Heckbert & Garland 1999) on radlab-hierarchical's
-//! generic engine. The face-cluster tree is built over the scene ([`FaceClusterTree::build`]), its roots (one
-//! per dual-connected part) become the engine's roots, and the first links are every ordered pair of roots and
-//! each curved root's self-link; refinement, gather/push-pull and the schedules are the engine's, light moves
+//! generic engine. The face-cluster tree is built over the scene ([`FaceClusterTree::build`]); its roots (one
+//! per dual-connected part) are the leaves of a loose octree of volumes (Christensen et al. 1997) whose root
+//! is the engine's one root, and the first link is that volume's self-link (refined into links between volumes,
+//! roots and each curved root's self-link, as volume clusters refine theirs: Sillion 1995); refinement, gather/push-pull and the schedules are the engine's, light moves
 //! by [`VectorTransport`]. Radiosity at a point of a face comes from the deepest engine node holding the face:
 //! its patch if the refinement reached the face, else B = E + ρ max(0, n·e) with the irradiance vector e
 //! pushed to the deepest face cluster containing it (section 4's final propagation, per queried face).
@@ -16,21 +17,28 @@ use radlab_scene::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::face_node::{ClusterRef, FaceContext, FaceNode};
+use crate::face_node::{FaceContext, FaceNode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
 
 /// Default ε of the face-cluster method (with the power error norm, as volume clusters).
 pub const DEFAULT_EPSILON: f64 = 1e-4;
 
+/// Default directory of cached hierarchies (relative to the working directory of the program that caches).
+pub const DEFAULT_CACHE_DIR: &str = "results/.cache/face-cluster";
+
 /// Parameters of the face-cluster method: every parameter of the hierarchical engine
-/// ([`HierarchicalParams`]: same names, same checks) with the power error norm and ε = 1e-4 by default; the
-/// hierarchy is built with [`FaceClusterParams::default`].
+/// ([`HierarchicalParams`]: same names, same checks) with the power error norm and ε = 1e-4 by default, and
+/// where a caller caches hierarchies; the hierarchy is built with [`FaceClusterParams::default`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FaceClusterSolveParams {
     /// The engine's parameters.
     #[serde(flatten)]
     pub engine: HierarchicalParams,
+    /// Directory of cached hierarchies, one file per mesh digest ([`crate::digest`]); empty: no cache. This
+    /// crate reads and writes no file: the program that builds the solver (radlab's runner) does, and hands
+    /// the hierarchy to [`FaceClusterSolver::with_tree`]. Default [`DEFAULT_CACHE_DIR`].
+    pub cache_dir: String,
 }
 
 impl Default for FaceClusterSolveParams {
@@ -41,16 +49,23 @@ impl Default for FaceClusterSolveParams {
                 epsilon: DEFAULT_EPSILON,
                 ..HierarchicalParams::default()
             },
+            cache_dir: DEFAULT_CACHE_DIR.to_string(),
         }
     }
 }
 
 impl MethodParams for FaceClusterSolveParams {
     fn docs() -> Vec<(&'static str, &'static str)> {
-        HierarchicalParams::docs()
+        let mut d: Vec<_> = HierarchicalParams::docs()
             .into_iter()
             .filter(|(k, _)| *k != "lazy_linking")
-            .collect()
+            .collect();
+        d.push((
+            "cache_dir",
+            "directory of cached face-cluster hierarchies, one file per mesh digest (relative to the working \
+             directory); \"\" builds the hierarchy every run",
+        ));
+        d
     }
 
     fn validate(&self) -> Result<(), SolveError> {
@@ -69,6 +84,7 @@ impl MethodParams for FaceClusterSolveParams {
                     _ => (k, v),
                 }
             })
+            .chain([("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}"))])
             .collect()
     }
 
@@ -76,15 +92,25 @@ impl MethodParams for FaceClusterSolveParams {
         if table.remove("lazy_linking").is_some() {
             return Err(SolveError::param(
                 "lazy_linking",
-                "face clusters start from links between the hierarchy's roots, so there are no initial \
-                 links to make lazily; remove the parameter",
+                "face clusters start from one self-link of the volume above the hierarchy's roots, so \
+                 there are no initial links to make lazily; remove the parameter",
             ));
         }
+        let cache_dir = match table.remove("cache_dir") {
+            None => DEFAULT_CACHE_DIR.to_string(),
+            Some(toml::Value::String(s)) => s,
+            Some(v) => {
+                return Err(SolveError::param(
+                    "cache_dir",
+                    format!("{v} is not a directory name; give a string (\"\" for no cache)"),
+                ));
+            }
+        };
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
         let engine = HierarchicalParams::from_table(full)?;
-        Ok(Self { engine })
+        Ok(Self { engine, cache_dir })
     }
 }
 
@@ -159,24 +185,12 @@ impl<'a> FaceClusterSolver<'a> {
             },
         );
         let output = SurfaceOutput::new(p.reconstruction, seed);
-        let nodes: Vec<FaceNode<'a>> = roots
-            .clone()
-            .map(|id| {
-                FaceNode::Cluster(ClusterRef {
-                    ctx: Arc::clone(&ctx),
-                    id: id as u32,
-                })
-            })
-            .collect();
-        let mut engine = Engine::new(nodes, transport, p, min_size)?;
+        let root = ctx.root_volume();
+        let mut engine = Engine::new(vec![root], transport, p, min_size)?;
         engine.skip_initial_links();
         let before = accel.rays_cast();
-        let n = roots.len() as u32;
-        for r in 0..n {
-            for s in 0..n {
-                engine.add_link(r, s)?;
-            }
-        }
+        let top = engine.roots()[0];
+        engine.add_link(top, top)?;
         let rays = accel.rays_cast().saturating_sub(before);
         let mut s = Self {
             scene,

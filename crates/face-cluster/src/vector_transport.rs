@@ -36,10 +36,18 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{GatherAt, Link, NodeKind, NodeView, PatchKernel, Transport};
-use radlab_scene::{Accel, Rgb, form_factor::VisibilitySampling};
+use radlab_scene::{
+    Accel, Polygon, Ray, Rgb,
+    form_factor::{VisibilitySampling, point_polygon_vector},
+};
 
 use crate::bounds::angle_between;
 use crate::face_node::FaceNode;
+
+/// A single-face source is near when its bounding radius exceeds this fraction of the distance between the
+/// two ends' centres: there the point form's relative error, of order (R/r)², would pass 1%, and the link
+/// uses the face's exact irradiance vector instead.
+pub const NEAR: f64 = 0.1;
 
 /// Normal-cone half-angle (radians) below which a node is flat: rounding, not curvature, and no self-link.
 pub const FLAT_CONE: f64 = 1e-6;
@@ -88,10 +96,117 @@ impl<'a> VectorTransport<'a> {
         let seen = (0..n)
             .filter(|&i| {
                 let (p, q) = (pa[i % pa.len()], pb[(i / pa.len() + i) % pb.len()]);
-                self.accel.visible(p, q)
+                self.visible_past_ends(p, q, a, b)
             })
             .count();
         seen as f64 / n as f64
+    }
+}
+
+/// The polygon of a single-face source: a patch, or a tree leaf (reading its face, counted as a face read).
+fn source_polygon(src: &FaceNode<'_>) -> Option<Polygon> {
+    match src {
+        FaceNode::Patch(p) => Some(p.polygon),
+        FaceNode::Cluster(c) if c.node().is_leaf() => {
+            let f = c.ctx.tree.faces_of(c.id as usize)[0] as usize;
+            c.ctx.count_face_read();
+            Some(c.ctx.scene.polygon(f))
+        }
+        _ => None,
+    }
+}
+
+/// Most surfaces a visibility ray passes through its own ends before it counts as blocked (beyond this the
+/// segment is taken as blocked).
+const MAX_END_CROSSINGS: usize = 32;
+
+impl VectorTransport<'_> {
+    /// The link from a near single-face source to a flat receiver, whose every face has the whole source
+    /// above its plane: the source's exact irradiance vector at the receiver's centroid per unit radiosity,
+    /// Φ(c_R) = (1/2π) Σ_edges Θ_e û_e (Arvo 1994), so that each receiving face gets n·Φ B_S, the exact
+    /// point-to-polygon factor (Baum, Rushmeier & Winget 1989, eq. 3) times the source's radiosity.
+    /// `None` when the link is not of that kind; `Some(None)` when nothing is transferred.
+    fn near_face_link(
+        &self,
+        recv: &FaceNode<'_>,
+        src: &FaceNode<'_>,
+        src_id: u32,
+    ) -> Option<Option<Link>> {
+        if recv.is_volume() || recv.as_patch().is_some() || src.area() <= 0.0 {
+            return None;
+        }
+        let cone = recv.cone();
+        let (rb, sb) = (recv.bound(), src.bound());
+        let dist = (rb.centre - sb.centre).length();
+        let single = match src {
+            FaceNode::Patch(_) => true,
+            FaceNode::Cluster(c) => c.node().is_leaf(),
+            FaceNode::Volume(_) => false,
+        };
+        if !single || cone.half_angle >= FLAT_CONE || sb.radius <= NEAR * dist {
+            return None;
+        }
+        let poly = source_polygon(src)?;
+        let (n, c) = (cone.axis, recv.centroid());
+        // The whole source above the receiver's plane: no receiving face clips it.
+        if poly.vertices().iter().any(|v| n.dot(*v - c) <= 0.0) {
+            return None;
+        }
+        let f = n.dot(point_polygon_vector(c, &poly));
+        if f <= 0.0 {
+            return Some(None);
+        }
+        let v = self.visibility(recv, src);
+        if v <= 0.0 {
+            return Some(None);
+        }
+        Some(Some(Link {
+            source: src_id,
+            coefficient: v,
+            f_recv: f as f32,
+            f_src: (f * recv.area() / src.area()).min(1.0) as f32,
+            spread: f as f32,
+            visibility: v as f32,
+            overlap: false,
+            clustered: false,
+        }))
+    }
+
+    /// Whether the segment p → q between sample points of ends `a` and `b` is unobstructed by anything but
+    /// the ends themselves. A point transfer already counts which of an end's faces face the other end (its
+    /// power vector, or A/4 for a volume), so an end's own surfaces must not occlude its rays: a sample point
+    /// on the far side of a closed part would otherwise hide the whole part.
+    fn visible_past_ends(&self, p: DVec3, q: DVec3, a: &FaceNode<'_>, b: &FaceNode<'_>) -> bool {
+        let len = (q - p).length();
+        if !(len > 0.0 && len.is_finite()) {
+            return true;
+        }
+        let dir = (q - p) / len;
+        let mut hit = self.accel.intersect(&Ray {
+            origin: p,
+            dir,
+            tmax: len,
+        });
+        for _ in 0..MAX_END_CROSSINGS {
+            let Some(h) = hit else {
+                return true;
+            };
+            // Ends touched at q itself never occlude (as in Accel::visible).
+            if h.t >= len * (1.0 - 1e-9) {
+                return true;
+            }
+            if !(a.holds(h.face) || b.holds(h.face)) {
+                return false;
+            }
+            hit = self
+                .accel
+                .intersect_from(h.face, h.point, dir)
+                .map(|mut h2| {
+                    h2.t += h.t;
+                    h2
+                });
+        }
+        false
     }
 }
 
@@ -107,6 +222,19 @@ fn bound_only(src_id: u32, f_rs: f64, f_sr: f64) -> Link {
         overlap: false,
         clustered: true,
     }
+}
+
+/// Whether `flat` has one orientation and all of `other` lies behind or in its plane, so that nothing passes
+/// between them (coplanar parts, such as tiles of one floor, would otherwise touch and be refined to their
+/// faces). `size` scales the tolerance of "in the plane".
+fn behind_flat(flat: &FaceNode<'_>, other: &FaceNode<'_>, size: f64) -> bool {
+    let cone = flat.cone();
+    if flat.is_volume() || cone.half_angle >= FLAT_CONE {
+        return false;
+    }
+    let (n, c) = (cone.axis, flat.centroid());
+    let tol = 1e-9 * (size + flat.bound().radius);
+    other.hull().iter().all(|p| n.dot(*p - c) <= tol)
 }
 
 /// Direction and squared distance from `src` to `recv` centroids.
@@ -144,6 +272,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             return self.patches.patch_link(r, s, src_id);
         }
         if recv_id == src_id {
+            if recv.is_volume() {
+                // A volume's self-link carries nothing: it is refined into its children's links.
+                return Some(Link::overlapping(src_id));
+            }
             let theta = recv.cone().half_angle;
             if theta < FLAT_CONE || !recv.sees_itself() {
                 return None;
@@ -154,10 +286,21 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             return Some(l);
         }
         let (rb, sb) = (recv.bound(), src.bound());
+        if behind_flat(recv, src, sb.radius) || behind_flat(src, recv, rb.radius) {
+            return None;
+        }
+        if let Some(l) = self.near_face_link(recv, src, src_id) {
+            return l;
+        }
         let between = rb.centre - sb.centre;
         let dist = between.length();
         let (ar, as_) = (recv.area(), src.area());
+        let volume_end = recv.is_volume() || src.is_volume();
         if dist <= rb.radius + sb.radius {
+            if volume_end {
+                // A volume and something within its box: refined until the ends are apart (Sillion 1995).
+                return Some(Link::overlapping(src_id));
+            }
             if !(ar > 0.0 && as_ > 0.0) {
                 return None;
             }
@@ -169,12 +312,22 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
         let d_c = between / dist;
         let spread = ((rb.radius + sb.radius) / dist).min(1.0).asin();
-        let (cr, cs) = (recv.cone(), src.cone());
-        let (alpha_s, alpha_r) = (angle_between(cs.axis, d_c), angle_between(cr.axis, -d_c));
+        // Per end: whether nothing of it faces the other, and whether some face might see the link from
+        // behind. A volume is isotropic: neither.
+        let facing = |n: &FaceNode<'a>, toward: DVec3| -> (bool, bool) {
+            if n.is_volume() {
+                return (false, false);
+            }
+            let c = n.cone();
+            let alpha = angle_between(c.axis, toward);
+            (
+                alpha - c.half_angle - spread >= HALF_PI,
+                alpha + c.half_angle + spread > HALF_PI,
+            )
+        };
+        let ((away_s, straddle_s), (away_r, straddle_r)) = (facing(src, d_c), facing(recv, -d_c));
         // Nothing of one end faces the other.
-        if alpha_s - cs.half_angle - spread >= HALF_PI
-            || alpha_r - cr.half_angle - spread >= HALF_PI
-        {
+        if away_s || away_r {
             return None;
         }
         let (_, r2) = centroid_geometry(recv.centroid(), src.centroid());
@@ -186,8 +339,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         let (f_rs, f_sr) = ((as_ / pi_g2).min(1.0), (ar / pi_g2).min(1.0));
         // Some face of an end might see the link from behind: the vector form does not hold; split, unless
         // the link's geometric estimate is already below the final ε (then its error is too).
-        if alpha_s + cs.half_angle + spread > HALF_PI || alpha_r + cr.half_angle + spread > HALF_PI
-        {
+        if straddle_s || straddle_r {
             let norm = if self.norm_area > 0.0 {
                 ar / self.norm_area
             } else {
@@ -227,10 +379,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         link: &Link,
         at_receiver: bool,
     ) -> DVec3 {
-        if !link.clustered
-            && let (FaceNode::Patch(t), FaceNode::Patch(s)) = (target, src)
-        {
-            return t.normal * self.patches.patch_coefficient(t, s, link, at_receiver);
+        if !link.clustered {
+            if let (FaceNode::Patch(t), FaceNode::Patch(s)) = (target, src) {
+                return t.normal * self.patches.patch_coefficient(t, s, link, at_receiver);
+            }
+            // A near single-face source: its exact irradiance vector times the link's visibility.
+            if let Some(poly) = source_polygon(src) {
+                return point_polygon_vector(target.centroid(), &poly) * link.coefficient;
+            }
         }
         if target.key() == src.key() {
             // A self-link: the cap's share f of its own mean radiosity, along its axis.
@@ -251,6 +407,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         let s = link.source as usize;
         if !link.clustered || link.source == recv {
             return b[s];
+        }
+        if view.nodes[s].is_volume() {
+            // An isotropic source: projected area A/4 toward every direction (Sillion 1995).
+            return b[s] * (0.25 * view.nodes[s].area());
         }
         let (d, _) = centroid_geometry(
             view.nodes[recv as usize].centroid(),
@@ -276,6 +436,22 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         with_emission: bool,
     ) -> (Rgb, [DVec3; 3]) {
         match leaf {
+            FaceNode::Volume(_) => {
+                // An isotropic receiver: its faces' mean irradiance is |e|/4; it sends as a volume (from its
+                // radiosity), so no power vector.
+                let e = if with_emission {
+                    leaf.emission()
+                } else {
+                    Rgb::ZERO
+                };
+                let rho = leaf.reflectance();
+                let b = Rgb::new(
+                    e[0] + 0.25 * rho[0] * h[0].length(),
+                    e[1] + 0.25 * rho[1] * h[1].length(),
+                    e[2] + 0.25 * rho[2] * h[2].length(),
+                );
+                (b, [DVec3::ZERO; 3])
+            }
             FaceNode::Patch(p) => {
                 let e = if with_emission { p.emission } else { Rgb::ZERO };
                 let b = Rgb::new(
@@ -316,6 +492,8 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
 
     fn uniform_response(&self, leaf: &FaceNode<'a>) -> (Rgb, [DVec3; 3]) {
         match leaf {
+            // Unit irradiance from every direction: B = ρ.
+            FaceNode::Volume(_) => (leaf.reflectance(), [DVec3::ZERO; 3]),
             FaceNode::Patch(p) => (
                 p.reflectance,
                 std::array::from_fn(|k| p.normal * (p.reflectance[k] * p.area)),

@@ -7,6 +7,7 @@
 pub mod cli;
 pub mod commands;
 pub mod experiment;
+pub mod face_cache;
 pub mod methods;
 pub mod output;
 pub mod pathtraced;

@@ -102,14 +102,20 @@ pub fn methods() -> Vec<MethodInfo> {
             radlab_volume_cluster::VolumeClusterParams,
             radlab_volume_cluster::VolumeClusterSolver
         ),
-        method!(
-            "face-cluster",
-            "Face cluster radiosity (Willmott, Heckbert & Garland 1999): face-cluster hierarchies from dual-graph \
-             contraction, irradiance and power vectors per node, links between the hierarchies' roots refined by \
-             the hierarchical oracles; gather, push and pull never read an input face. For detailed meshes.",
-            radlab_face_cluster::FaceClusterSolveParams,
-            radlab_face_cluster::FaceClusterSolver
-        ),
+        MethodInfo {
+            name: "face-cluster",
+            summary: "Face cluster radiosity (Willmott, Heckbert & Garland 1999): face-cluster hierarchies from \
+                 dual-graph contraction (cached per mesh digest in cache_dir), irradiance and power vectors per \
+                 node, a volume octree above the hierarchies' roots, one self-link refined by the hierarchical \
+                 oracles; gather, push and pull never read an input face. For detailed meshes.",
+            params: param_lines::<radlab_face_cluster::FaceClusterSolveParams>,
+            build: |scene, accel, table, seed, _points| {
+                crate::face_cache::build_solver(scene, accel, table, seed)
+            },
+            validate: |table| {
+                radlab_face_cluster::FaceClusterSolveParams::from_table(table).map(|_| ())
+            },
+        },
         method!(
             "mc-radiosity",
             "Mesh-based Monte Carlo radiosity: particles shot from the emitters and deposited on a fixed element \

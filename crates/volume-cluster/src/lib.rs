@@ -63,7 +63,7 @@ mod transfer_isotropic;
 pub use cluster_link::{box_distance, cluster_link};
 pub use cluster_node::{ClusterNode, ClusterRef};
 pub use cluster_transport::{ClusterTransport, TransferMode};
-pub use loose_octree::{Cluster, ClusterTree};
+pub use loose_octree::{Cluster, ClusterTree, OctreeItem};
 pub use params::{Transfer, VolumeClusterParams};
 pub use solver::{ClusterSolver, VolumeClusterSolver};
 pub use transfer_alpha::Alpha;

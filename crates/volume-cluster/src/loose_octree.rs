@@ -59,6 +59,24 @@ fn face_box(scene: &Scene, f: FaceId) -> (DVec3, DVec3) {
         })
 }
 
+/// What the octree clusters: an axis-aligned box with the surface it holds (an input face, or any group of
+/// faces, such as a face-cluster root).
+#[derive(Clone, Copy, Debug)]
+pub struct OctreeItem {
+    /// Lower corner of its box.
+    pub lo: DVec3,
+    /// Upper corner.
+    pub hi: DVec3,
+    /// Its area.
+    pub area: f64,
+    /// Its area-weighted centroid.
+    pub centroid: DVec3,
+    /// Its area-mean reflectance.
+    pub reflectance: Rgb,
+    /// Its area-mean emission.
+    pub emission: Rgb,
+}
+
 impl ClusterTree {
     /// Builds the loose octree over every face of `scene` (at least one face).
     pub fn build(scene: &Scene) -> Self {
@@ -67,20 +85,38 @@ impl ClusterTree {
 
     /// Builds the loose octree over the given faces of `scene` (at least one).
     pub fn build_over(scene: &Scene, all: Vec<FaceId>) -> Self {
-        let boxes: Vec<(DVec3, DVec3)> = (0..scene.face_count())
-            .map(|f| face_box(scene, f))
+        let items: Vec<OctreeItem> = (0..scene.face_count())
+            .map(|f| {
+                let (lo, hi) = face_box(scene, f);
+                let face = &scene.faces[f];
+                OctreeItem {
+                    lo,
+                    hi,
+                    area: face.area,
+                    centroid: face.centroid,
+                    reflectance: scene.reflectance(f),
+                    emission: scene.emission(f),
+                }
+            })
             .collect();
+        Self::build_over_items(&items, all)
+    }
+
+    /// Builds the loose octree over `all` (at least one index into `items`): the same tree as
+    /// [`ClusterTree::build_over`] for items that are not faces (a face-cluster method clusters its roots).
+    /// "Faces" of the tree are then item indices.
+    pub fn build_over_items(items: &[OctreeItem], all: Vec<FaceId>) -> Self {
         let mut tree = Self {
             clusters: Vec::new(),
-            face_order: Vec::with_capacity(scene.face_count()),
+            face_order: Vec::with_capacity(all.len()),
             area_prefix: Vec::new(),
         };
-        tree.build_cluster(scene, &boxes, all);
+        tree.build_cluster(items, all);
         let mut prefix = Vec::with_capacity(tree.face_order.len() + 1);
         let mut acc = 0.0;
         prefix.push(0.0);
         for &f in &tree.face_order {
-            acc += scene.faces[f].area;
+            acc += items[f].area;
             prefix.push(acc);
         }
         tree.area_prefix = prefix;
@@ -88,16 +124,11 @@ impl ClusterTree {
     }
 
     /// Builds the cluster over `faces` and its subtree; returns its id.
-    fn build_cluster(
-        &mut self,
-        scene: &Scene,
-        boxes: &[(DVec3, DVec3)],
-        faces: Vec<FaceId>,
-    ) -> u32 {
+    fn build_cluster(&mut self, items: &[OctreeItem], faces: Vec<FaceId>) -> u32 {
         let (lo, hi) = faces
             .iter()
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &f| {
-                (lo.min(boxes[f].0), hi.max(boxes[f].1))
+                (lo.min(items[f].lo), hi.max(items[f].hi))
             });
         let id = self.clusters.len() as u32;
         let start = self.face_order.len() as u32;
@@ -113,22 +144,22 @@ impl ClusterTree {
             end: start,
             direct: 0,
         });
-        let (direct, groups) = partition(boxes, faces, lo, hi);
+        let (direct, groups) = partition(items, faces, lo, hi);
         self.clusters[id as usize].direct = direct.len() as u32;
         self.face_order.extend_from_slice(&direct);
         let mut children = Vec::with_capacity(groups.len());
         for g in groups {
-            children.push(self.build_cluster(scene, boxes, g));
+            children.push(self.build_cluster(items, g));
         }
         let end = self.face_order.len() as u32;
         // Sums over the face range.
         let (mut area, mut c, mut rho, mut e) = (0.0, DVec3::ZERO, Rgb::ZERO, Rgb::ZERO);
         for &f in &self.face_order[start as usize..end as usize] {
-            let face = &scene.faces[f];
-            area += face.area;
-            c += face.area * face.centroid;
-            rho += face.area * scene.reflectance(f);
-            e += face.area * scene.emission(f);
+            let it = &items[f];
+            area += it.area;
+            c += it.area * it.centroid;
+            rho += it.area * it.reflectance;
+            e += it.area * it.emission;
         }
         let cl = &mut self.clusters[id as usize];
         cl.children = children;
@@ -178,7 +209,7 @@ impl ClusterTree {
 /// octants (in octant order). Three faces or fewer stay; so do all of them when the split makes no progress
 /// (every face in one octant, whose box is then this box: coincident faces, or extents of exactly half).
 fn partition(
-    boxes: &[(DVec3, DVec3)],
+    items: &[OctreeItem],
     faces: Vec<FaceId>,
     lo: DVec3,
     hi: DVec3,
@@ -191,7 +222,7 @@ fn partition(
     let mut stay = Vec::new();
     let mut octants: [Vec<FaceId>; 8] = Default::default();
     for &f in &faces {
-        let (flo, fhi) = boxes[f];
+        let (flo, fhi) = (items[f].lo, items[f].hi);
         let ext = fhi - flo;
         if ext.x <= half.x && ext.y <= half.y && ext.z <= half.z {
             let c = 0.5 * (flo + fhi);

@@ -12,4 +12,4 @@ pub use area_area::{
     visibility_fraction,
 };
 pub use estimate::form_factor_estimate;
-pub use point_polygon::{point_polygon, point_polygon_unclipped};
+pub use point_polygon::{point_polygon, point_polygon_unclipped, point_polygon_vector};

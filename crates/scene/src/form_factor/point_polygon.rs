@@ -50,8 +50,27 @@ pub fn point_polygon_unclipped(x: DVec3, n: DVec3, poly: &Polygon) -> f64 {
     contour_sum(n, &rel)
 }
 
-fn contour_sum(n: DVec3, rel: &[DVec3]) -> f64 {
-    let mut s = 0.0;
+/// The polygon's irradiance vector at `x` per unit radiosity of its front,
+///
+///   Φ(x) = (1/2π) Σ_k γ_k û_k,  û_k = (r_{k+1} × r_k)/|r_{k+1} × r_k|,
+///
+/// (the irradiance vector of a polygon: Arvo 1994, "The Irradiance Jacobian for Partially Occluded Polyhedral
+/// Sources", section 3), so that
+/// F_{dA→P} = n·Φ(x) for every normal n whose upper half-space holds the whole polygon (the unclipped contour
+/// integral above). Zero when `x` lies behind or in the polygon's plane (it emits from its front only).
+pub fn point_polygon_vector(x: DVec3, poly: &Polygon) -> DVec3 {
+    let v = poly.vertices();
+    if (x - v[0]).dot(poly.vector_area()) <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let rel: Vec<DVec3> = v.iter().map(|&p| p - x).collect();
+    contour_vector(&rel)
+}
+
+/// Σ_k γ_k û_k / 2π over the edges of the polygon with vertices `rel` (relative to the receiving point),
+/// oriented toward the side the polygon's front faces (counter-clockwise seen from the front).
+fn contour_vector(rel: &[DVec3]) -> DVec3 {
+    let mut s = DVec3::ZERO;
     for k in 0..rel.len() {
         let a = rel[k].normalize_or_zero();
         let b = rel[(k + 1) % rel.len()].normalize_or_zero();
@@ -59,11 +78,16 @@ fn contour_sum(n: DVec3, rel: &[DVec3]) -> f64 {
         let cl = c.length();
         if cl > 1e-300 {
             let gamma = cl.atan2(a.dot(b));
-            s += gamma * n.dot(c) / cl;
+            s -= c * (gamma / cl);
         }
     }
-    // Vertices ordered counter-clockwise seen from the front give a negative sum seen from in front.
-    (s.abs() / (2.0 * std::f64::consts::PI)).min(1.0)
+    s / (2.0 * std::f64::consts::PI)
+}
+
+fn contour_sum(n: DVec3, rel: &[DVec3]) -> f64 {
+    // Vertices ordered counter-clockwise seen from the front give a vector toward the front's side; seen
+    // from behind a clipped piece the sign flips, hence the magnitude.
+    n.dot(contour_vector(rel)).abs().min(1.0)
 }
 
 #[cfg(test)]
@@ -147,5 +171,32 @@ mod tests {
         let a = point_polygon(DVec3::ZERO, DVec3::Z, &full);
         let b = point_polygon(DVec3::ZERO, DVec3::Z, &upper);
         assert!(a > 0.0 && (a - b).abs() < 1e-14, "{a} {b}");
+    }
+
+    #[test]
+    fn irradiance_vector_dotted_with_a_normal_is_the_form_factor() {
+        // A unit square above the origin, facing down, seen from normals tilted so that it stays above.
+        let p = Polygon::quad(
+            dvec3(-0.5, -0.5, 1.),
+            dvec3(-0.5, 0.5, 1.),
+            dvec3(0.5, 0.5, 1.),
+            dvec3(0.5, -0.5, 1.),
+        );
+        let x = dvec3(0.1, -0.2, 0.0);
+        let phi = point_polygon_vector(x, &p);
+        for n in [
+            dvec3(0., 0., 1.),
+            dvec3(0.2, 0.1, 1.).normalize(),
+            dvec3(-0.3, 0.2, 1.).normalize(),
+        ] {
+            let f = point_polygon(x, n, &p);
+            assert!(
+                (n.dot(phi) - f).abs() <= 1e-14,
+                "{n}: {} vs {f}",
+                n.dot(phi)
+            );
+        }
+        // Behind the polygon: nothing.
+        assert_eq!(point_polygon_vector(dvec3(0., 0., 2.), &p), DVec3::ZERO);
     }
 }
