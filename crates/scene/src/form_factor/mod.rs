@@ -8,7 +8,8 @@ pub mod gauss_legendre;
 mod point_polygon;
 
 pub use area_area::{
-    VisibilitySampling, polygon_polygon, polygon_polygon_unoccluded, visibility_fraction,
+    VisibilitySampling, polygon_polygon, polygon_polygon_unoccluded, receiver_points,
+    visibility_fraction,
 };
 pub use estimate::form_factor_estimate;
 pub use point_polygon::{point_polygon, point_polygon_unclipped};
