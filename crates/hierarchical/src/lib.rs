@@ -80,7 +80,6 @@ mod oracle;
 pub mod output;
 mod params;
 mod push_pull;
-pub mod quadrature;
 mod refine;
 mod schedule;
 mod solver;

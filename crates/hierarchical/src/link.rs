@@ -3,7 +3,8 @@
 //! A link from source s to receiver r carries the transfer coefficient of the gather H_r += K_rs B_s: for
 //! patches K_rs = V_rs F_rs, with
 //!
-//! F_rs = Σ_k w_k F_{dA(x_k)→s},  x_k the receiver's Gauss points (weights w_k summing to 1),
+//! F_rs = Σ_k w_k F_{dA(x_k)→s},  x_k the receiver's Gauss points (weights w_k summing to 1; radlab-scene's
+//! [`receiver_points`], the rule matrix and progressive radiosity integrate with),
 //!
 //! the receiver-side quadrature of the exact point-to-polygon factor (Lambert's contour integral, clipped to
 //! the receiver's horizon; Baum, Rushmeier & Winget 1989, eq. 3), and V_rs the fraction of unobstructed rays
@@ -18,8 +19,8 @@
 
 use glam::DVec3;
 use radlab_scene::{
-    Accel,
-    form_factor::{VisibilitySampling, point_polygon, visibility_fraction},
+    Accel, facing_away,
+    form_factor::{VisibilitySampling, point_polygon, receiver_points, visibility_fraction},
     sampling,
 };
 
@@ -27,7 +28,6 @@ use radlab_scene::Rgb;
 
 use crate::node::{NodeKind, Patch};
 use crate::params::Gather;
-use crate::quadrature::{gauss_legendre, polygon_points};
 use crate::transport::{GatherAt, NodeView, Transport};
 
 /// A transport link, stored with its receiver.
@@ -80,7 +80,7 @@ pub fn link_stream(a: u64, b: u64) -> u64 {
 #[derive(Debug)]
 pub struct PatchKernel<'a> {
     accel: &'a Accel,
-    rule: Vec<(f64, f64)>,
+    quadrature: u32,
     visibility: VisibilitySampling,
     seed: u64,
     gather: Gather,
@@ -97,7 +97,7 @@ impl<'a> PatchKernel<'a> {
     ) -> Self {
         Self {
             accel,
-            rule: gauss_legendre(quadrature),
+            quadrature,
             visibility,
             seed,
             gather,
@@ -111,7 +111,7 @@ impl<'a> PatchKernel<'a> {
 
     /// Mean of the point-to-polygon factor from `recv`'s quadrature points to `src`.
     pub fn kernel_mean(&self, recv: &Patch, src: &Patch) -> f64 {
-        polygon_points(&recv.polygon, &self.rule)
+        receiver_points(&recv.polygon, self.quadrature)
             .iter()
             .map(|(x, w)| w * point_polygon(*x, recv.normal, &src.polygon))
             .sum()
@@ -124,7 +124,7 @@ impl<'a> PatchKernel<'a> {
         let mut mean = 0.0;
         let c = point_polygon(recv.centroid, recv.normal, &src.polygon);
         let (mut lo, mut hi) = (c, c);
-        for (x, w) in polygon_points(&recv.polygon, &self.rule) {
+        for (x, w) in receiver_points(&recv.polygon, self.quadrature) {
             let f = point_polygon(x, recv.normal, &src.polygon);
             mean += w * f;
             lo = lo.min(f);
@@ -134,19 +134,18 @@ impl<'a> PatchKernel<'a> {
     }
 }
 
-/// Whether some vertex of `b` lies strictly in front of `a`'s plane.
-fn in_front(a: &Patch, b: &Patch) -> bool {
-    let tol = 1e-9 * a.max_edge.max(b.max_edge);
-    b.polygon
-        .vertices()
-        .iter()
-        .any(|v| (*v - a.centroid).dot(a.normal) > tol)
-}
-
 impl PatchKernel<'_> {
     /// Whether two patches can exchange light: different faces, each partly in front of the other.
     pub fn patches_interact(recv: &Patch, src: &Patch) -> bool {
-        recv.face != src.face && in_front(recv, src) && in_front(src, recv)
+        recv.face != src.face
+            && !facing_away(
+                &recv.polygon,
+                recv.centroid,
+                recv.normal,
+                &src.polygon,
+                src.centroid,
+                src.normal,
+            )
     }
 
     /// The link between two patches: kernel quadrature, both form factors, sampled visibility.

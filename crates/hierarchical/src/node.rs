@@ -66,6 +66,12 @@ pub const LATTICE: u32 = 1 << 30;
 /// Deepest quadtree level (the lattice's resolution).
 pub const MAX_LEVEL: u8 = 30;
 
+/// Relative slack of the minimum-size test: an element splits if its children's longest edge reaches the
+/// minimum size up to this fraction. Edges are computed from rounded vertex coordinates, so an edge of
+/// exactly twice the minimum size at one scale (h and h/16, say: powers of two are exact) lies a rounding error
+/// above or below it at another; without the slack the same scene split differently at 1e-4 of its size.
+pub const SIZE_TOL_REL: f64 = 1e-9;
+
 /// A quadtree element: an input face or a piece of one.
 #[derive(Clone, Copy, Debug)]
 pub struct Patch {
@@ -181,7 +187,7 @@ impl NodeKind for Patch {
     }
 
     fn can_split(&self, min_size: f64) -> bool {
-        self.level < MAX_LEVEL && self.max_edge >= 2.0 * min_size
+        self.level < MAX_LEVEL && self.max_edge >= 2.0 * min_size * (1.0 - SIZE_TOL_REL)
     }
 
     fn split(&self) -> Vec<Self> {

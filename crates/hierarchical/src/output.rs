@@ -1,6 +1,6 @@
 //! The output layer, for any node kind whose hierarchy reaches the input faces: locating a surface point in
-//! the hierarchy (from the node that is the whole face down through its quadtree, in the face's parameter
-//! space) and answering radiosity there: constant per leaf, vertex-interpolated ([`crate::gouraud`]), or by a
+//! the hierarchy (from the node that is the whole face down through its quadtree by containment, radlab-scene's
+//! shared [`radlab_scene::locate::descend`]) and answering radiosity there: constant per leaf, vertex-interpolated ([`crate::gouraud`]), or by a
 //! final gather from every leaf (B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j; Lischinski, Tampieri & Greenberg
 //! 1993, through radlab-scene's shared [`Reconstructor`]). Solvers built on the engine (patches, volume
 //! clusters) share it.
@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::gouraud::{face_corner_values, interpolate};
 use crate::hierarchy::Engine;
-use crate::locate::{insideness, param_coords, param_corners};
+use crate::locate::{Quadtrees, param_coords, param_corners};
 use crate::node::NodeKind;
 use crate::transport::Transport;
 
@@ -116,29 +116,11 @@ pub fn locate<N: NodeKind, T: Transport<N>>(
     face: FaceId,
     point: DVec3,
 ) -> Option<u32> {
-    let mut i = engine.face_node(face)?;
-    let Some(root) = engine.nodes()[i as usize].patch() else {
+    let i = engine.face_node(face)?;
+    if engine.nodes()[i as usize].patch().is_none() {
         return Some(i);
-    };
-    let q = param_coords(&root.polygon, point);
-    while !engine.is_leaf(i) {
-        let mut best = (f64::NEG_INFINITY, i);
-        for c in engine.children(i) {
-            let Some(p) = engine.nodes()[c as usize].patch() else {
-                continue;
-            };
-            let (corners, n) = param_corners(p);
-            let d = insideness(&corners[..n], q);
-            if d > best.0 {
-                best = (d, c);
-            }
-        }
-        if best.1 == i {
-            break;
-        }
-        i = best.1;
     }
-    Some(i)
+    Some(radlab_scene::locate::descend(&Quadtrees(engine), i, point))
 }
 
 /// Every leaf that is a quadtree element, as the shared reconstructions see it.

@@ -24,7 +24,7 @@ use std::ops::Range;
 
 use glam::DVec3;
 use radlab_scene::{
-    Accel, ElementMesh, Scene, SolveError,
+    Accel, ElementMesh, Scene, SolveError, facing_away,
     form_factor::{VisibilitySampling, polygon_polygon_unoccluded, visibility_fraction},
 };
 use rayon::prelude::*;
@@ -49,28 +49,13 @@ pub fn required_bytes(n: u64) -> u64 {
         .saturating_add(n.saturating_mul(bytes_per_element()))
 }
 
-/// The number of elements `ElementMesh::new(scene, size)` will make, computed without meshing so a refusal
-/// costs nothing. Mirrors `Polygon::subdivide`: quads into nu × nv, triangles into m².
+/// The number of elements `ElementMesh::new(scene, size)` will make ([`radlab_scene::Polygon::subdivision`]
+/// of every face), computed without meshing so a refusal costs nothing.
 pub fn predicted_element_count(scene: &Scene, size: f64) -> u64 {
-    let segs = |len: f64| -> u64 {
-        if size.is_nan() || size <= 0.0 || !len.is_finite() {
-            1
-        } else {
-            ((len / size).ceil() as u64).clamp(1, 1 << 12)
-        }
-    };
     (0..scene.faces.len())
         .map(|f| {
-            let p = scene.polygon(f);
-            let v = p.vertices();
-            if v.len() == 4 {
-                let nu = segs((v[1] - v[0]).length().max((v[2] - v[3]).length()));
-                let nv = segs((v[3] - v[0]).length().max((v[2] - v[1]).length()));
-                nu * nv
-            } else {
-                let m = segs(p.max_edge());
-                m * m
-            }
+            let (nu, nv) = scene.polygon(f).subdivision(size);
+            (nu * nv) as u64
         })
         .sum()
 }
@@ -80,7 +65,6 @@ pub fn predicted_element_count(scene: &Scene, size: f64) -> u64 {
 struct Geometry {
     normal: DVec3,
     centroid: DVec3,
-    diameter: f64,
 }
 
 /// The matrix being assembled, row block by row block.
@@ -134,7 +118,6 @@ impl Assembly {
             .map(|e| Geometry {
                 normal: e.polygon.normal(),
                 centroid: e.centroid,
-                diameter: e.polygon.diameter(),
             })
             .collect();
         Ok(Self {
@@ -241,14 +224,6 @@ impl Assembly {
     }
 }
 
-/// Whether `poly`'s vertices all lie on or behind the plane through `c` with normal `nrm` (to a relative
-/// tolerance): then neither polygon sees the other's front, and both factors are zero.
-fn behind(poly: &radlab_scene::Polygon, nrm: DVec3, c: DVec3, scale: f64) -> bool {
-    poly.vertices()
-        .iter()
-        .all(|&v| nrm.dot(v - c) <= 1e-12 * scale)
-}
-
 /// One unordered pair: (A_i F_ij, A_j F_ji, receiver quadratures computed, rays requested).
 fn pair(
     mesh: &ElementMesh,
@@ -264,10 +239,14 @@ fn pair(
         return (0.0, 0.0, 0, 0);
     }
     let (gi, gj) = (&geometry[i], &geometry[j]);
-    let scale = (gi.centroid - gj.centroid).length() + gi.diameter + gj.diameter;
-    if behind(&ej.polygon, gi.normal, gi.centroid, scale)
-        || behind(&ei.polygon, gj.normal, gj.centroid, scale)
-    {
+    if facing_away(
+        &ei.polygon,
+        gi.centroid,
+        gi.normal,
+        &ej.polygon,
+        gj.centroid,
+        gj.normal,
+    ) {
         return (0.0, 0.0, 0, 0);
     }
     let uij = polygon_polygon_unoccluded(&ei.polygon, &ej.polygon, s.quadrature);

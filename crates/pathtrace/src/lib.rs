@@ -76,7 +76,6 @@
 
 mod camera_render;
 mod discrete_distribution;
-mod element_locate;
 mod emitter_sampling;
 mod mesh_radiosity;
 mod path_estimator;

@@ -29,7 +29,6 @@ use radlab_scene::{
 use serde::{Deserialize, Serialize};
 
 use crate::discrete_distribution::Discrete;
-use crate::element_locate::ElementLocator;
 use crate::emitter_sampling::channel_mean;
 use crate::point_estimator::DEFAULT_MAX_DEPTH;
 use crate::{random_walk, stochastic_jacobi};
@@ -147,7 +146,6 @@ pub(crate) struct Transport<'a> {
     pub scene: &'a Scene,
     pub accel: &'a Accel,
     pub mesh: &'a ElementMesh,
-    pub locator: &'a ElementLocator,
     /// Emitting elements, chosen with probability A_e Ē_e / Σ.
     pub sources: &'a Discrete,
     pub source_elements: &'a [usize],
@@ -187,10 +185,7 @@ impl Transport<'_> {
         if self.scene.faces[hit.face].normal.dot(dir) >= 0.0 {
             return None; // the back of a face absorbs
         }
-        Some(
-            self.locator
-                .locate(self.scene, self.mesh, hit.face, hit.point),
-        )
+        Some(self.mesh.locate(hit.face, hit.point))
     }
 }
 
@@ -204,7 +199,6 @@ struct MeshSolution<'a> {
     scene: &'a Scene,
     accel: &'a Accel,
     mesh: ElementMesh,
-    locator: ElementLocator,
     radiosity: Vec<Rgb>,
     output: Reconstructor,
 }
@@ -214,7 +208,7 @@ impl Solution for MeshSolution<'_> {
         if face >= self.scene.faces.len() {
             return Rgb::splat(f64::NAN);
         }
-        let element = || self.locator.locate(self.scene, &self.mesh, face, point);
+        let element = || self.mesh.locate(face, point);
         self.output.radiosity_at(
             self.scene,
             self.accel,
@@ -262,7 +256,6 @@ impl<'a> McRadiositySolver<'a> {
             ));
         }
         let mesh = ElementMesh::new(scene, size);
-        let locator = ElementLocator::new(scene, &mesh);
         let source_elements: Vec<usize> = (0..mesh.len())
             .filter(|&e| scene.material(mesh.elements[e].face as FaceId).is_emitter())
             .collect();
@@ -285,7 +278,6 @@ impl<'a> McRadiositySolver<'a> {
                 accel,
                 output: Reconstructor::new(reconstruction, seed),
                 mesh,
-                locator,
                 radiosity,
             },
             m2: vec![Rgb::ZERO; n],
@@ -349,7 +341,6 @@ impl Solver for McRadiositySolver<'_> {
             scene: self.solution.scene,
             accel: self.accel,
             mesh: &self.solution.mesh,
-            locator: &self.solution.locator,
             sources: &self.sources,
             source_elements: &self.source_elements,
             max_depth: self.params.max_depth,
@@ -405,7 +396,6 @@ impl Solver for McRadiositySolver<'_> {
             form_factors: 0,
             rays: self.rays,
             bytes: (self.solution.mesh.bytes()
-                + self.solution.locator.bytes()
                 + 2 * n * size_of::<Rgb>()
                 + self.source_elements.len() * (size_of::<usize>() + size_of::<f64>()))
                 as u64,

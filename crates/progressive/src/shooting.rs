@@ -45,7 +45,7 @@
 use radlab_scene::form_factor::{
     VisibilitySampling, polygon_polygon_unoccluded, visibility_fraction,
 };
-use radlab_scene::{Accel, Polygon, Rgb, Scene};
+use radlab_scene::{Accel, Rgb, Scene, facing_away};
 use rayon::prelude::*;
 
 use crate::substructuring::{Element, Mesh, Patch};
@@ -82,11 +82,6 @@ impl std::ops::AddAssign for Work {
 /// Receivers below this count are gathered on the calling thread (rayon's overhead would dominate).
 const PARALLEL_MIN_RECEIVERS: usize = 256;
 
-/// Whether every vertex of `poly` lies on or behind the plane through `origin` with normal `n`.
-fn behind(poly: &Polygon, origin: glam::DVec3, n: glam::DVec3) -> bool {
-    poly.vertices().iter().all(|&v| (v - origin).dot(n) <= 0.0)
-}
-
 /// F_{e→j}: form factor from element `e` (index `ei`) toward patch `j` (index `pj`), with the work done.
 /// Zero, without work, for pairs on one face and pairs that face away from each other.
 pub(crate) fn element_patch_factor(
@@ -104,9 +99,14 @@ pub(crate) fn element_patch_factor(
     let ne = scene.faces[e.face as usize].normal;
     let nj = scene.faces[j.face as usize].normal;
     // Back-face culling: point_polygon would give 0 at every receiver point.
-    if behind(&j.polygon, e.polygon.vertices()[0], ne)
-        || behind(&e.polygon, j.polygon.vertices()[0], nj)
-    {
+    if facing_away(
+        &e.polygon,
+        e.polygon.vertices()[0],
+        ne,
+        &j.polygon,
+        j.polygon.vertices()[0],
+        nj,
+    ) {
         return (0.0, Work::default());
     }
     let f = polygon_polygon_unoccluded(&e.polygon, &j.polygon, kernel.quadrature);

@@ -11,8 +11,6 @@
 //! and the radiosity it shoots is its unshot part ΔB_p. Each patch keeps the invariant B_p = S_p + ΔB_p, where
 //! S_p is the total radiosity it has shot so far; that total is what elements created later re-gather from.
 
-use std::ops::Range;
-
 use radlab_scene::{Polygon, Rgb, Scene, SolveError};
 
 /// A shooting patch.
@@ -83,23 +81,10 @@ pub(crate) struct Mesh {
 /// Slack on the element size so a patch cut to exactly `element_size` is not split again by rounding.
 const SIZE_SLACK: f64 = 1.0 + 1e-9;
 
-/// Pieces [`Polygon::subdivide`] makes of `poly` at `size` (same rule, without building them).
+/// Pieces [`Polygon::subdivide`] makes of `poly` at `size`.
 pub(crate) fn piece_count(poly: &Polygon, size: f64) -> f64 {
-    let segs = |len: f64| -> f64 {
-        if size.is_nan() || size <= 0.0 || !len.is_finite() {
-            1.0
-        } else {
-            (len / size).ceil().clamp(1.0, 4096.0)
-        }
-    };
-    let v = poly.vertices();
-    if v.len() == 4 {
-        segs((v[1] - v[0]).length().max((v[2] - v[3]).length()))
-            * segs((v[3] - v[0]).length().max((v[2] - v[1]).length()))
-    } else {
-        let m = segs(poly.max_edge());
-        m * m
-    }
+    let (nu, nv) = poly.subdivision(size);
+    (nu * nv) as f64
 }
 
 /// Bytes held per element, for budgets and reports: the element, its leaf entry, its place in the face grid and
@@ -183,7 +168,8 @@ impl Mesh {
     }
 
     /// Top-level elements of face `f`.
-    pub fn roots_of(&self, f: usize) -> Range<usize> {
+    #[cfg(test)]
+    pub fn roots_of(&self, f: usize) -> std::ops::Range<usize> {
         self.face_roots[f] as usize..self.face_roots[f + 1] as usize
     }
 

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
-use radlab_scene::{FaceId, Scene};
+use radlab_scene::{Accel, FaceId, Scene};
 use rayon::prelude::*;
 
 /// How far (relative to the scene's bounding diagonal) a probe point may lie from the surface it is matched to.
@@ -88,21 +88,22 @@ pub fn read_points(path: &Path) -> Result<Vec<(DVec3, Option<DVec3>)>> {
     Ok(out)
 }
 
-/// Matches each point to its face. `file` names the input for errors.
+/// Matches each point to its face through the scene's BVH ([`Accel::nearest_faces`]: O(log n) per point).
+/// `file` names the input for errors.
 pub fn match_points(
     scene: &Scene,
+    accel: &Accel,
     points: &[(DVec3, Option<DVec3>)],
     file: &str,
 ) -> Result<Vec<ProbePoint>> {
-    let polys: Vec<_> = (0..scene.faces.len()).map(|f| scene.polygon(f)).collect();
     let max_d = MAX_DISTANCE_REL * scene.diagonal();
     points
         .par_iter()
         .enumerate()
         .map(|(i, &(p, n))| {
-            let d: Vec<f64> = polys.iter().map(|poly| poly.distance_to(p)).collect();
-            let best = d.iter().cloned().fold(f64::INFINITY, f64::min);
-            if !(best <= max_d) {
+            let near = accel.nearest_faces(p, 1e-9 * scene.diagonal());
+            let best = near.as_ref().map_or(f64::INFINITY, |n| n.0);
+            let Some((_, candidates)) = near.filter(|_| best <= max_d) else {
                 bail!(
                     "{file}: row {}: point ({}, {}, {}) is {best:.3e} from the nearest surface (limit {max_d:.3e}, \
                      {MAX_DISTANCE_REL} of the scene's diagonal); probe points must lie on surfaces",
@@ -111,10 +112,10 @@ pub fn match_points(
                     p.y,
                     p.z
                 );
-            }
-            let tol = best + 1e-9 * scene.diagonal();
-            let face = (0..polys.len())
-                .filter(|&f| d[f] <= tol)
+            };
+            let face = candidates
+                .iter()
+                .copied()
                 .max_by(|&a, &b| {
                     let score = |f: usize| n.map_or(0.0, |n| scene.faces[f].normal.dot(n));
                     score(a).total_cmp(&score(b)).then(b.cmp(&a))

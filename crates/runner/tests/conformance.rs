@@ -228,10 +228,18 @@ const EXCEPTIONS: &[Exception] = &[
         case: "energy balance",
         expect: Expect::Misses,
         overrides: &[],
-        // Measured 6.0e-4 against 3e-4 (2026-11-30).
-        reason: "source-side averaging conserves energy only up to the refinement's accuracy (crate \
-                 documentation: about 1e-4 at these settings on a closed box, its test's bound 3e-4); this room \
-                 is 6 times that",
+        // Measured 6.0e-4 against 3e-4 (2026-11-30). Not a conservation defect in the code and not the solver's
+        // tolerance: on this room (no block) the imbalance is −6.38e-4 at tolerance 1e-6, 1e-8 and 1e-10 alike,
+        // the same at 2 × 2, 4 × 4 and 8 × 8 receiver points and at leaves ≥ h/16, ≥ h/64 or the default
+        // minimum size (−6.4e-4 … −6.8e-4), and falls with ε (−2.1e-4 at ε = 0.005): the source-side
+        // averaging error of the refinement (a source node sends its leaves' mean radiosity with its own mean
+        // form factor, off by the covariance of B and F over the node), which grows with how unevenly the
+        // sources are lit. The crate's 3e-4 was measured on a box with two large emitters and so does not
+        // bound this room with one small light; an a-priori bound on the covariance is not derived yet.
+        reason: "source-side averaging conserves energy only to the refinement's accuracy, proportional to ε \
+                 (−6.4e-4 at ε = 0.02, −2.1e-4 at ε = 0.005 on this room, independent of tolerance, receiver \
+                 quadrature and minimum size); the crate's stated 3e-4 was measured on a scene with evenly lit \
+                 sources and does not transfer",
     },
     Exception {
         method: "hierarchical",
@@ -240,16 +248,6 @@ const EXCEPTIONS: &[Exception] = &[
         overrides: &[],
         // Measured 5.8e-4 against 3e-4 (2026-11-30).
         reason: "as for the energy balance: source-side averaging, about 6 times the crate's stated 1e-4",
-    },
-    Exception {
-        method: "hierarchical",
-        case: "scale 1e-4 and 1e4",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 5.8e-3 at the table's settings, 1.7e-2 at its defaults with leaves ≥ h/4 (2026-11-30); the
-        // lengths (`*_size`) are scaled with the scene.
-        reason: "the answer changes with the scene's scale: some length or area in its refinement or linking \
-                 is absolute (a bug to fix in radlab-hierarchical)",
     },
     Exception {
         method: "pathtrace",

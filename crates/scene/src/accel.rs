@@ -665,6 +665,77 @@ impl Accel {
         (hit, cost)
     }
 
+    /// The distance from `p` to the nearest face, and every face within `slack` (scene units) of that
+    /// distance, in increasing order; `None` for a scene without faces. A branch-and-bound descent of the BVH
+    /// (nearer boxes first; a box farther than the best distance so far plus `slack` is skipped), with exact
+    /// f64 point-to-triangle distances at the leaves: O(log n) for a point on a surface of n faces, where
+    /// comparing with every face costs O(n).
+    pub fn nearest_faces(&self, p: DVec3, slack: f64) -> Option<(f64, Vec<FaceId>)> {
+        if self.bvh.nodes.is_empty() || self.slot_tri.is_empty() {
+            return None;
+        }
+        let po = p - self.offset;
+        let pn = Vec3A::from((po * self.inv_scale).as_vec3());
+        // The boxes hold the f32 triangles padded by BOX_PAD_REL of the diagonal; a box distance is a lower
+        // bound on the f64 distance up to the f32 rounding of p and of the box (far below that pad).
+        let box_distance = |b: &Aabb| -> f64 {
+            let d = (b.min - pn).max(pn - b.max).max(Vec3A::ZERO);
+            d.length() as f64 / self.inv_scale
+        };
+        let slack = slack.max(0.0);
+        let mut best = f64::INFINITY;
+        let mut found: Vec<(f64, FaceId)> = Vec::new();
+        let mut stack: Vec<(f64, u32)> = vec![(0.0, 0)];
+        while let Some((d_node, i)) = stack.pop() {
+            if d_node > best + slack {
+                continue;
+            }
+            let node = &self.bvh.nodes[i as usize];
+            let mut inner: [(f64, u32); 8] = [(f64::INFINITY, 0); 8];
+            let mut n_inner = 0;
+            for child in 0..8 {
+                if node.is_child_empty(child) {
+                    continue;
+                }
+                let d = box_distance(&node.child_aabb(child));
+                if d > best + slack {
+                    continue;
+                }
+                if node.is_leaf(child) {
+                    let (first, count) = node.child_primitives(child);
+                    for slot in first as usize..(first + count) as usize {
+                        let [a, n] = self.slot_plane[slot];
+                        if n == DVec3::ZERO {
+                            continue;
+                        }
+                        let (b, c) = self.far_vertices(slot);
+                        let dist = crate::Polygon::triangle(a, b, c).distance_to(po);
+                        best = best.min(dist);
+                        found.push((dist, self.slot_tri[slot].face()));
+                    }
+                } else {
+                    inner[n_inner] = (d, node.child_node_index(child));
+                    n_inner += 1;
+                }
+            }
+            // Nearest child last, so it is taken first.
+            let inner = &mut inner[..n_inner];
+            inner.sort_by(|x, y| y.0.total_cmp(&x.0));
+            stack.extend_from_slice(inner);
+        }
+        if !best.is_finite() {
+            return None;
+        }
+        let mut faces: Vec<FaceId> = found
+            .into_iter()
+            .filter(|&(d, _)| d <= best + slack)
+            .map(|(_, f)| f)
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        Some((best, faces))
+    }
+
     /// Whether the segment between `p` and `q` is unobstructed, for points that may lie on surfaces: a
     /// surface the segment only touches at an end never occludes it.
     pub fn visible(&self, p: DVec3, q: DVec3) -> bool {

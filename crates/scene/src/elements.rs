@@ -1,13 +1,14 @@
 //! A fixed element mesh over the scene: each input face regularly subdivided into elements no longer than a
 //! target size along an edge (quads into bilinear grids, triangles into m² triangles). Matrix, progressive and
 //! mesh-based Monte Carlo radiosity all solve over such a mesh; the element containing a surface point is found
-//! by [`ElementMesh::locate`].
+//! by [`ElementMesh::locate`] (the shared [`ElementLocator`], O(1) per query).
 
 use std::ops::Range;
 
 use glam::DVec3;
 
 use crate::gouraud::ElementValue;
+use crate::locate::{ElementLocator, ElementTree};
 use crate::{FaceId, Polygon, Rgb, Scene};
 
 /// The default element size as a fraction of the scene's bounding-box diagonal, so every scene's scale gets the
@@ -35,6 +36,30 @@ pub struct ElementMesh {
     face_start: Vec<u32>,
     /// The element size it was meshed to, in scene units.
     pub element_size: f64,
+    locator: ElementLocator,
+}
+
+/// The mesh's elements and face ranges, as the locator sees them (no element has children).
+struct Flat<'a> {
+    elements: &'a [Element],
+    face_start: &'a [u32],
+}
+
+impl ElementTree for Flat<'_> {
+    fn roots(&self, face: FaceId) -> Range<u32> {
+        match (self.face_start.get(face), self.face_start.get(face + 1)) {
+            (Some(&a), Some(&b)) => a..b,
+            _ => 0..0,
+        }
+    }
+
+    fn polygon(&self, e: u32) -> Option<&Polygon> {
+        self.elements.get(e as usize).map(|el| &el.polygon)
+    }
+
+    fn children(&self, _e: u32) -> Range<u32> {
+        0..0
+    }
 }
 
 impl ElementMesh {
@@ -54,10 +79,18 @@ impl ElementMesh {
             }
         }
         face_start.push(elements.len() as u32);
+        let locator = ElementLocator::new(
+            scene,
+            &Flat {
+                elements: &elements,
+                face_start: &face_start,
+            },
+        );
         Self {
             elements,
             face_start,
             element_size,
+            locator,
         }
     }
 
@@ -78,26 +111,21 @@ impl ElementMesh {
 
     /// The element of face `f` that contains `point` (the nearest one if the point lies slightly outside).
     pub fn locate(&self, f: FaceId, point: DVec3) -> usize {
-        let range = self.elements_of(f);
-        let mut best = range.start;
-        let mut best_d = f64::INFINITY;
-        for e in range {
-            let poly = &self.elements[e].polygon;
-            if poly.contains(point, 1e-9) {
-                return e;
-            }
-            let d = poly.distance_to(point);
-            if d < best_d {
-                best_d = d;
-                best = e;
-            }
+        let flat = Flat {
+            elements: &self.elements,
+            face_start: &self.face_start,
+        };
+        match self.locator.locate(&flat, f, point) {
+            Some(e) => e as usize,
+            None => self.elements_of(f).start,
         }
-        best
     }
 
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
-        self.elements.len() * size_of::<Element>() + self.face_start.len() * 4
+        self.elements.len() * size_of::<Element>()
+            + self.face_start.len() * 4
+            + self.locator.bytes()
     }
 
     /// Every element with its value from `radiosity` (in element order), as the reconstructions take them.

@@ -145,6 +145,53 @@ impl Polygon {
         }
     }
 
+    /// The inverse of the polygon's lattice parameterisation: (s, t) with p = v0 + s (v1 − v0) + t (v2 − v0)
+    /// for a triangle (barycentric coordinates; the map [`Polygon::subdivide`] cuts along), with
+    /// p = [`Polygon::point_at`]\(s, t) for a quad (the inverse bilinear map, by Gauss–Newton from the centre:
+    /// exact in one step for a parallelogram, quadratically convergent for any planar convex quad). Of a point
+    /// off the plane, the coordinates of its projection; not clamped, so a point outside the polygon gets
+    /// coordinates outside [0, 1]². Zero for a degenerate polygon.
+    pub fn param_coords(&self, p: DVec3) -> glam::DVec2 {
+        use glam::DVec2;
+        let v = self.vertices();
+        // Solves the 2 × 2 normal equations [a b; b c] x = r of a least-squares step.
+        let solve = |ds: DVec3, dt: DVec3, d: DVec3| -> Option<DVec2> {
+            let (a, b, c) = (ds.dot(ds), ds.dot(dt), dt.dot(dt));
+            let det = a * c - b * b;
+            if det == 0.0 || det.is_nan() {
+                return None;
+            }
+            let (r1, r2) = (d.dot(ds), d.dot(dt));
+            Some(DVec2::new((c * r1 - b * r2) / det, (a * r2 - b * r1) / det))
+        };
+        if self.n == 3 {
+            return solve(v[1] - v[0], v[2] - v[0], p - v[0]).unwrap_or(DVec2::ZERO);
+        }
+        let mut st = DVec2::splat(0.5);
+        for _ in 0..12 {
+            let (s, t) = (st.x, st.y);
+            let r = self.point_at(s, t) - p;
+            let ds = (v[1] - v[0]) * (1.0 - t) + (v[2] - v[3]) * t;
+            let dt = (v[3] - v[0]) * (1.0 - s) + (v[2] - v[1]) * s;
+            let Some(step) = solve(ds, dt, r) else {
+                break;
+            };
+            st -= step;
+            if step.length_squared() < 1e-28 {
+                break;
+            }
+        }
+        st
+    }
+
+    /// Whether every vertex lies on or behind the plane through `origin` with unit normal `normal`, to `tol`
+    /// (scene units).
+    pub fn behind_plane(&self, origin: DVec3, normal: DVec3, tol: f64) -> bool {
+        self.vertices()
+            .iter()
+            .all(|&v| (v - origin).dot(normal) <= tol)
+    }
+
     /// Whether `p` (assumed near the polygon's plane) projects inside the polygon, with a relative tolerance.
     pub fn contains(&self, p: DVec3, tol: f64) -> bool {
         let n = self.vector_area();
@@ -206,11 +253,11 @@ impl Polygon {
         }
     }
 
-    /// Regular subdivision into pieces of about `size` (at least one piece): a quad into a nu × nv bilinear grid
-    /// (no piece longer than `size` along an edge), a triangle into m² similar triangles with m set by its
-    /// second-longest edge, so the two halves of a split quad get the same grid as the quad would (the longest
-    /// edge, their diagonal, would make them four times finer).
-    pub fn subdivide(&self, size: f64) -> Vec<Polygon> {
+    /// The grid [`Polygon::subdivide`] cuts at `size`: (nu, nv) pieces along a quad's two parameter
+    /// directions (ceil(length / size) of the longer opposite edge of each pair), or (m, m) for a triangle's m²
+    /// pieces (m from its second-longest edge). At least 1 and at most 4096 per direction; a size that is
+    /// not positive, or a non-finite edge, gives 1.
+    pub fn subdivision(&self, size: f64) -> (usize, usize) {
         let v = &self.verts;
         let segs = |len: f64| -> usize {
             if !(size > 0.0) || !len.is_finite() {
@@ -220,8 +267,27 @@ impl Polygon {
             }
         };
         if self.n == 4 {
-            let nu = segs((v[1] - v[0]).length().max((v[2] - v[3]).length()));
-            let nv = segs((v[3] - v[0]).length().max((v[2] - v[1]).length()));
+            (
+                segs((v[1] - v[0]).length().max((v[2] - v[3]).length())),
+                segs((v[3] - v[0]).length().max((v[2] - v[1]).length())),
+            )
+        } else {
+            let (a, b, c) = (v[0], v[1], v[2]);
+            let mut e = [(b - a).length(), (c - b).length(), (a - c).length()];
+            e.sort_by(f64::total_cmp);
+            let m = segs(e[1]);
+            (m, m)
+        }
+    }
+
+    /// Regular subdivision into pieces of about `size` (at least one piece): a quad into a nu × nv bilinear grid
+    /// (no piece longer than `size` along an edge), a triangle into m² similar triangles with m set by its
+    /// second-longest edge, so the two halves of a split quad get the same grid as the quad would (the longest
+    /// edge, their diagonal, would make them four times finer). The grid is [`Polygon::subdivision`].
+    pub fn subdivide(&self, size: f64) -> Vec<Polygon> {
+        let v = &self.verts;
+        let (nu, nv) = self.subdivision(size);
+        if self.n == 4 {
             let mut out = Vec::with_capacity(nu * nv);
             for j in 0..nv {
                 for i in 0..nu {
@@ -238,9 +304,7 @@ impl Polygon {
             out
         } else {
             let (a, b, c) = (v[0], v[1], v[2]);
-            let mut e = [(b - a).length(), (c - b).length(), (a - c).length()];
-            e.sort_by(f64::total_cmp);
-            let m = segs(e[1]);
+            let m = nu;
             // Lattice point (i, j) = a + i/m (b - a) + j/m (c - a), i + j <= m.
             let p = |i: usize, j: usize| {
                 a + (b - a) * (i as f64 / m as f64) + (c - a) * (j as f64 / m as f64)
@@ -280,6 +344,30 @@ impl Polygon {
         }
         true
     }
+}
+
+/// Relative tolerance of the back-face test [`facing_away`]: a vertex within this fraction of the two
+/// polygons' longest edge from a plane counts as on it. Relative, so the test does not depend on the scene's
+/// units; 1e-9 is far above the rounding of f64 coordinates (about 1e-16 of their magnitude, so faces up to
+/// 1e6 times smaller than their distance from the origin are still told apart) and far below any gap a scene
+/// models on purpose.
+pub const FACING_TOL_REL: f64 = 1e-9;
+
+/// The back-face test: whether polygon `b` lies wholly on or behind the plane of `a` (through `a_origin`, any
+/// point of `a`, with unit normal `a_normal`) or `a` wholly on or behind the plane of `b`. Then neither sees
+/// the other's front, and both form factors vanish (the point kernel is zero at every receiver point:
+/// Baum, Rushmeier & Winget 1989, eq. 3 with the source clipped to the receiver's horizon). Tolerance:
+/// [`FACING_TOL_REL`] × the longer of the two longest edges.
+pub fn facing_away(
+    a: &Polygon,
+    a_origin: DVec3,
+    a_normal: DVec3,
+    b: &Polygon,
+    b_origin: DVec3,
+    b_normal: DVec3,
+) -> bool {
+    let tol = FACING_TOL_REL * a.max_edge().max(b.max_edge());
+    b.behind_plane(a_origin, a_normal, tol) || a.behind_plane(b_origin, b_normal, tol)
 }
 
 /// [`Polygon::sample_uniform`] with the choice between a quad's two triangles (probability proportional to

@@ -173,6 +173,34 @@ impl Scene {
         (self.bounds.1 - self.bounds.0).length()
     }
 
+    /// Whether the faces form a closed surface: every edge, matched by position (vertices within 1e-9 of the
+    /// diagonal are one), is shared by exactly two faces. Then every point sees only the scene's own faces, so
+    /// a furnace (one material) has B = E/(1 − ρ) everywhere.
+    pub fn is_closed(&self) -> bool {
+        type GridPoint = (i64, i64, i64);
+        let q = 1e-9 * self.diagonal();
+        let key = |p: DVec3| {
+            (
+                (p.x / q).round() as i64,
+                (p.y / q).round() as i64,
+                (p.z / q).round() as i64,
+            )
+        };
+        let mut edges: std::collections::HashMap<(GridPoint, GridPoint), u32> =
+            std::collections::HashMap::new();
+        for f in 0..self.faces.len() {
+            let poly = self.polygon(f);
+            let v = poly.vertices();
+            for k in 0..v.len() {
+                let (a, b) = (key(v[k]), key(v[(k + 1) % v.len()]));
+                *edges
+                    .entry(if a < b { (a, b) } else { (b, a) })
+                    .or_default() += 1;
+            }
+        }
+        edges.values().all(|&c| c == 2)
+    }
+
     /// Faces whose material emits.
     pub fn emitters(&self) -> Vec<FaceId> {
         (0..self.faces.len())

@@ -778,3 +778,38 @@ fn f32_decisions_agree_with_f64_near_edges_and_at_grazing_angles() {
     }
     assert_eq!(accel.rays_cast(), cast);
 }
+
+#[test]
+fn nearest_faces_agree_with_comparing_every_face() {
+    // Points on and near the faces of a bumpy sphere in a room (and at its corners, where several faces tie):
+    // the BVH query finds the nearest distance and every face within the slack, as a scan of all faces does.
+    let scene = radlab_scene::builtin("bumpy-sphere?faces=600").expect("scene");
+    let accel = Accel::new(&scene);
+    let slack = 1e-9 * scene.diagonal();
+    let mut r = sampling::rng(11, 0);
+    for k in 0..400 {
+        let f = k % scene.face_count();
+        let poly = scene.polygon(f);
+        let mut p = poly.sample_uniform(sampling::uniform(&mut r), sampling::uniform(&mut r));
+        if k % 3 == 1 {
+            p +=
+                (sampling::uniform(&mut r) - 0.5) * 0.05 * scene.diagonal() * scene.faces[f].normal;
+        }
+        if k % 7 == 0 {
+            p = poly.vertices()[0];
+        }
+        let d: Vec<f64> = (0..scene.face_count())
+            .map(|g| scene.polygon(g).distance_to(p))
+            .collect();
+        let best = d.iter().copied().fold(f64::INFINITY, f64::min);
+        let (near, faces) = accel.nearest_faces(p, slack).expect("faces");
+        assert!(
+            (near - best).abs() <= 1e-12 * scene.diagonal(),
+            "{near} vs {best}"
+        );
+        let want: Vec<usize> = (0..scene.face_count())
+            .filter(|&g| d[g] <= best + slack)
+            .collect();
+        assert_eq!(faces, want, "point {k}");
+    }
+}

@@ -1001,3 +1001,17 @@ fn obj_groups_keep_connectivity_by_welding_equal_positions() {
     assert_eq!(across.faces.len(), 2);
     assert!(across.faces[0] < 2 && across.faces[1] >= 2, "{across:?}");
 }
+
+#[test]
+fn closed_scenes_are_told_from_open_ones() {
+    for (spec, closed) in [
+        ("furnace-cube?tessellation=3", true),
+        ("furnace-sphere?tessellation=2", true),
+        ("cornell", false),
+        ("perpendicular-squares", false),
+        ("terrain?faces=200", false),
+    ] {
+        let s = radlab_scene::builtin(spec).expect("scene");
+        assert_eq!(s.is_closed(), closed, "{spec}");
+    }
+}

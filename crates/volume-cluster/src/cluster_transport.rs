@@ -16,11 +16,13 @@
 use std::fmt::Debug;
 
 use glam::DVec3;
-use radlab_hierarchical::quadrature::{gauss_legendre, polygon_points};
 use radlab_hierarchical::{
     GatherAt, LinearState, Link, NodeKind, NodeView, PatchKernel, Transport,
 };
-use radlab_scene::{Accel, Rgb, form_factor::VisibilitySampling};
+use radlab_scene::{
+    Accel, Rgb,
+    form_factor::{VisibilitySampling, receiver_points},
+};
 
 use crate::cluster_link::{centroid_geometry, cluster_link};
 use crate::cluster_node::ClusterNode;
@@ -77,8 +79,8 @@ pub struct ClusterTransport<'a, M> {
     /// Per input face: whether it shares a region of free space with an emitter ([`crate::enclosure`]);
     /// empty when not computed (every face reachable).
     reachable: Vec<bool>,
-    /// Gauss rule over a patch receiver (weights sum to one).
-    rule: Vec<(f64, f64)>,
+    /// Gauss points per side of the receiver rule over a patch (radlab-scene's `receiver_points`).
+    quadrature: u32,
 }
 
 impl<'a, M: TransferMode> ClusterTransport<'a, M> {
@@ -98,7 +100,7 @@ impl<'a, M: TransferMode> ClusterTransport<'a, M> {
             seed,
             mode: M::default(),
             reachable: Vec::new(),
-            rule: gauss_legendre(quadrature),
+            quadrature,
         }
     }
 
@@ -188,7 +190,7 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
                 }
                 let s = src.centroid();
                 let v = link.visibility as f64;
-                let g: f64 = polygon_points(&p.polygon, &self.rule)
+                let g: f64 = receiver_points(&p.polygon, self.quadrature)
                     .iter()
                     .map(|(x, w)| {
                         let (d, r2) = centroid_geometry(*x, s);

@@ -28,7 +28,12 @@ pub struct ProbeArgs {
 pub fn run(args: &ProbeArgs) -> Result<()> {
     let raw = points_csv::read_points(&args.points)?;
     let loaded = load(&args.common.scene)?;
-    let points = points_csv::match_points(&loaded.scene, &raw, &args.points.display().to_string())?;
+    let points = points_csv::match_points(
+        &loaded.scene,
+        &loaded.accel,
+        &raw,
+        &args.points.display().to_string(),
+    )?;
     let eval: Vec<EvalPoint> = points
         .iter()
         .map(|p| EvalPoint {

@@ -8,7 +8,6 @@
 //! `auto` picks `furnace` for a closed one-material scene (every edge shared by exactly two faces, matched by
 //! position) and `pathtrace` otherwise.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
@@ -34,35 +33,10 @@ pub struct Reference {
     pub file: PathBuf,
 }
 
-/// A vertex position quantised to a grid, for matching shared edges.
-type GridPoint = (i64, i64, i64);
-
 /// Whether the scene is a closed surface with a single material: the furnace applies.
 pub fn is_furnace(scene: &Scene) -> bool {
     let m0 = scene.faces[0].material;
-    if scene.faces.iter().any(|f| f.material != m0) {
-        return false;
-    }
-    let q = 1e-9 * scene.diagonal();
-    let key = |p: glam::DVec3| {
-        (
-            (p.x / q).round() as i64,
-            (p.y / q).round() as i64,
-            (p.z / q).round() as i64,
-        )
-    };
-    let mut edges: HashMap<(GridPoint, GridPoint), u32> = HashMap::new();
-    for f in 0..scene.faces.len() {
-        let poly = scene.polygon(f);
-        let v = poly.vertices();
-        for k in 0..v.len() {
-            let (a, b) = (key(v[k]), key(v[(k + 1) % v.len()]));
-            *edges
-                .entry(if a < b { (a, b) } else { (b, a) })
-                .or_default() += 1;
-        }
-    }
-    edges.values().all(|&c| c == 2)
+    scene.faces.iter().all(|f| f.material == m0) && scene.is_closed()
 }
 
 /// Resolves `Auto`.

@@ -17,9 +17,9 @@
 //! m = 1 is the centroid. Any rule's weights sum to 1, so in a closed convex enclosure the unoccluded row sums
 //! Σ_j F_ij are 1 to rounding, as they are for every receiver point.
 
+use super::gauss_legendre;
 use glam::DVec3;
 
-use super::gauss_legendre;
 use crate::{Accel, FaceId, Polygon, sampling};
 
 /// How a visibility fraction between two elements is estimated.
@@ -141,36 +141,60 @@ pub fn pair_kernel(x: DVec3, nx: DVec3, y: DVec3, ny: DVec3) -> f64 {
     cx * cy / (r2 * r2)
 }
 
+/// The receiver rule over `poly`: m × m product Gauss–Legendre points of the bilinear parametrisation (a
+/// triangle as the quad a, b, c, c collapsed at c), each with its weight w_s w_t |∂p/∂s × ∂p/∂t| (not yet
+/// normalised: the weights sum to the area, to rounding). m = 0 is taken as 1 (the bilinear centre; see
+/// [`receiver_points`] for the centroid rule).
+fn receiver_rule(poly: &Polygon, m: u32) -> impl Iterator<Item = (DVec3, f64)> + '_ {
+    let v = poly.vertices();
+    let (a, b, c, d) = if v.len() == 3 {
+        (v[0], v[1], v[2], v[2])
+    } else {
+        (v[0], v[1], v[2], v[3])
+    };
+    let rule = gauss_legendre::rule(m.max(1) as usize);
+    let n = rule.len();
+    (0..n * n).map(move |k| {
+        let ((t, wt), (s, ws)) = (rule[k / n], rule[k % n]);
+        // Points along the edges a→b (t = 0) and d→c (t = 1), and the derivative along t.
+        let p0 = a.lerp(b, s);
+        let p1 = d.lerp(c, s);
+        let x = p0.lerp(p1, t);
+        let ds = (b - a).lerp(c - d, t);
+        let jac = ds.cross(p1 - p0).length();
+        (x, wt * ws * jac)
+    })
+}
+
+/// The receiver quadrature of the module documentation as points with weights summing to 1 (an area mean):
+/// m × m Gauss–Legendre points for m ≥ 2, the centroid alone for m ≤ 1. Every receiver-side integral of the
+/// point kernel (matrix, progressive and hierarchical radiosity) uses this rule.
+pub fn receiver_points(poly: &Polygon, m: u32) -> Vec<(DVec3, f64)> {
+    if m <= 1 {
+        return vec![(poly.centroid(), 1.0)];
+    }
+    let mut pts: Vec<(DVec3, f64)> = receiver_rule(poly, m).collect();
+    let total: f64 = pts.iter().map(|p| p.1).sum();
+    let uniform = 1.0 / pts.len() as f64;
+    for p in &mut pts {
+        p.1 = if total > 0.0 { p.1 / total } else { uniform };
+    }
+    pts
+}
+
 /// Unoccluded form factor from receiver polygon `recv` to the front of source `src`: the point-to-polygon
 /// factor integrated over the receiver with the m × m product Gauss–Legendre rule described in the module
 /// documentation (m = 1: the centroid only; m = 0 is taken as 1). Exact for point-like receivers; see the
 /// module documentation for how fast it converges in m.
 pub fn polygon_polygon_unoccluded(recv: &Polygon, src: &Polygon, m: u32) -> f64 {
     let n = recv.normal();
-    let m = m.max(1) as usize;
-    if m == 1 {
+    if m <= 1 {
         return super::point_polygon(recv.centroid(), n, src);
     }
-    let v = recv.vertices();
-    let (a, b, c, d) = if v.len() == 3 {
-        (v[0], v[1], v[2], v[2])
-    } else {
-        (v[0], v[1], v[2], v[3])
-    };
-    let rule = gauss_legendre::rule(m);
     let (mut sum, mut area) = (0.0, 0.0);
-    for &(t, wt) in rule.iter() {
-        // Points along the edges a→b (t = 0) and d→c (t = 1), and the derivative along t.
-        for &(s, ws) in rule.iter() {
-            let p0 = a.lerp(b, s);
-            let p1 = d.lerp(c, s);
-            let x = p0.lerp(p1, t);
-            let ds = (b - a).lerp(c - d, t);
-            let jac = ds.cross(p1 - p0).length();
-            let w = wt * ws * jac;
-            sum += w * super::point_polygon(x, n, src);
-            area += w;
-        }
+    for (x, w) in receiver_rule(recv, m) {
+        sum += w * super::point_polygon(x, n, src);
+        area += w;
     }
     if area > 0.0 { sum / area } else { 0.0 }
 }
@@ -194,4 +218,37 @@ pub fn polygon_polygon(
         return 0.0;
     }
     f * visibility_fraction(accel, recv, f_recv, src, f_src, how, seed, stream)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::dvec3;
+
+    use super::*;
+
+    #[test]
+    fn receiver_points_give_area_means() {
+        // Mean of x² over the unit right triangle: ∫x² dA / A = (1/12)/(1/2) = 1/6 (degree 2: exact at m = 2).
+        let t = Polygon::triangle(dvec3(0., 0., 0.), dvec3(1., 0., 0.), dvec3(0., 1., 0.));
+        for m in [2, 3, 5] {
+            let q: f64 = receiver_points(&t, m)
+                .iter()
+                .map(|(p, w)| w * p.x * p.x)
+                .sum();
+            assert!((q - 1.0 / 6.0).abs() < 1e-14, "m {m}: {q}");
+        }
+        // A trapezoid (not a parallelogram): width 4 − y at height y ∈ [0, 2], so the mean of y is
+        // ∫ y(4 − y) dy / ∫ (4 − y) dy = (16/3)/6 = 8/9.
+        let z = Polygon::quad(
+            dvec3(0., 0., 0.),
+            dvec3(4., 0., 0.),
+            dvec3(3., 2., 0.),
+            dvec3(1., 2., 0.),
+        );
+        let q: f64 = receiver_points(&z, 2).iter().map(|(p, w)| w * p.y).sum();
+        assert!((q - 8.0 / 9.0).abs() < 1e-14, "{q}");
+        // m = 1: the centroid, whose mean of any linear function is exact.
+        let c: DVec3 = receiver_points(&z, 1).iter().map(|(p, w)| *w * *p).sum();
+        assert!((c.y - 8.0 / 9.0).abs() < 1e-14, "{c}");
+    }
 }

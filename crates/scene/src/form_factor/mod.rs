@@ -8,7 +8,7 @@ pub mod gauss_legendre;
 mod point_polygon;
 
 pub use area_area::{
-    VisibilitySampling, pair_kernel, polygon_polygon, polygon_polygon_unoccluded,
+    VisibilitySampling, pair_kernel, polygon_polygon, polygon_polygon_unoccluded, receiver_points,
     visibility_fraction,
 };
 pub use estimate::form_factor_estimate;
