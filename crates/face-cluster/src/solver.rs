@@ -13,7 +13,8 @@ use std::sync::Arc;
 use glam::DVec3;
 use radlab_hierarchical::{Engine, ErrorNorm, HierarchicalParams, PatchKernel, SurfaceOutput};
 use radlab_scene::{
-    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
+    Accel, FaceId, MethodParams, Reconstruction, Rgb, Scene, Solution, SolveError, Solver, Stats,
+    Step,
 };
 use serde::{Deserialize, Serialize};
 
@@ -47,6 +48,9 @@ impl Default for FaceClusterSolveParams {
             engine: HierarchicalParams {
                 error_norm: ErrorNorm::Power,
                 epsilon: DEFAULT_EPSILON,
+                // The leaves' own values: a final gather (the hierarchical default) gathers only from leaves
+                // that are patches and has not been measured on face-cluster solutions.
+                reconstruction: Reconstruction::Constant,
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
@@ -81,6 +85,7 @@ impl MethodParams for FaceClusterSolveParams {
                 match k.as_str() {
                     "epsilon" => (k, d.engine.epsilon.to_string()),
                     "error_norm" => (k, "\"power\"".to_string()),
+                    "reconstruction" => (k, format!("\"{}\"", d.engine.reconstruction.as_str())),
                     _ => (k, v),
                 }
             })

@@ -25,7 +25,7 @@
 //! | `tolerance` | 1e-4 | estimated relative error at which solving stops |
 //! | `max_steps` | 100000 | hard stop |
 //! | `gather` | `leaf` | `leaf` (kernel integrated at each leaf for every link above it; exact form-factor sums) or `link` (classic per-link mean, pushed) |
-//! | `reconstruction` | `constant` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_scene::reconstruction) |
+//! | `reconstruction` | `final-gather` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_scene::reconstruction); the default chosen by measurement ([`DEFAULT_RECONSTRUCTION`]) |
 //! | `memory_budget_mib` | 4096 | refuse to hold more |
 //!
 //! Every quantity is relative (ε, tolerance) or relative to the scene's size (the default minimum element), so
@@ -90,6 +90,9 @@ pub use link::{Link, PatchKernel, link_stream, reflect_scalar};
 pub use node::{Bound, LATTICE, MAX_LEVEL, NodeKind, Patch};
 pub use oracle::{Action, decide, estimate, light_weight};
 pub use output::SurfaceOutput;
-pub use params::{ErrorNorm, Gather, HierarchicalParams, MIN_ELEMENT_SIZE_REL, Oracle, Schedule};
+pub use params::{
+    DEFAULT_RECONSTRUCTION, ErrorNorm, Gather, HierarchicalParams, MIN_ELEMENT_SIZE_REL, Oracle,
+    Schedule,
+};
 pub use solver::HierarchicalSolver;
 pub use transport::{GatherAt, LinearState, NodeView, Transport};

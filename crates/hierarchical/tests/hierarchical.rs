@@ -9,6 +9,14 @@ use radlab_scene::{
     Step, evaluation_points,
 };
 
+/// The defaults, answering points with the leaves' own values (`constant`): what these tests compare.
+fn leaf_params() -> HierarchicalParams {
+    HierarchicalParams {
+        reconstruction: Reconstruction::Constant,
+        ..HierarchicalParams::default()
+    }
+}
+
 fn solve<'a>(scene: &'a Scene, accel: &'a Accel, p: HierarchicalParams) -> HierarchicalSolver<'a> {
     let mut s = HierarchicalSolver::new(scene, accel, p, 7).expect("valid parameters");
     while s.step().expect("step") == Step::Continue {}
@@ -92,7 +100,7 @@ fn furnace_cube_and_sphere_give_e_over_one_minus_rho() {
                     epsilon: 0.01,
                     min_element_size: Some(scene.diagonal() / 30.0),
                     visibility: radlab_scene::form_factor::VisibilitySampling::Jittered2x2,
-                    ..HierarchicalParams::default()
+                    ..leaf_params()
                 };
                 let s = solve(&scene, &accel, p);
                 if oracle == Oracle::F || rho > 0.0 {
@@ -135,7 +143,7 @@ fn classic_link_gather_errs_near_rho_one_where_leaf_gather_does_not() {
             schedule: Schedule::TwoStage,
             epsilon: 0.05,
             min_element_size: Some(scene.diagonal() / 30.0),
-            ..HierarchicalParams::default()
+            ..leaf_params()
         };
         let s = solve(&scene, &accel, p);
         let bs: Vec<f64> = s.leaves().iter().map(|l| l.2.x).collect();
@@ -161,7 +169,7 @@ fn plates_match_howells_form_factors() {
         for gather in [Gather::Leaf, Gather::Link] {
             let p = HierarchicalParams {
                 gather,
-                ..HierarchicalParams::default()
+                ..leaf_params()
             };
             let s = solve(&scene, &accel, p);
             let (mut a, mut ab) = (0.0, 0.0);
@@ -201,7 +209,7 @@ fn error_against_matrix_falls_as_epsilon_shrinks() {
             epsilon,
             oracle: Oracle::F,
             min_element_size: Some(h),
-            ..HierarchicalParams::default()
+            ..leaf_params()
         };
         let s = solve(&scene, &accel, p);
         errors.push((epsilon, difference(&scene, &s, &m), s.stats().elements));
@@ -226,7 +234,7 @@ fn links_per_element_stay_bounded_as_elements_grow() {
             oracle: Oracle::F,
             schedule: Schedule::TwoStage,
             min_element_size: Some(min_size),
-            ..HierarchicalParams::default()
+            ..leaf_params()
         };
         let mut s = HierarchicalSolver::new(&scene, &accel, p, 1).expect("solver");
         // Refinement only: the links do not depend on the solution with the F oracle.
@@ -295,7 +303,7 @@ fn emitted_power_is_absorbed_in_a_closed_unoccluded_scene() {
             tolerance: 1e-8,
             epsilon,
             oracle: Oracle::F,
-            ..HierarchicalParams::default()
+            ..leaf_params()
         };
         let s = solve(&scene, &accel, p);
         let mut absorbed = Rgb::ZERO;
@@ -330,7 +338,7 @@ fn schedules_reach_the_same_answer() {
             alpha: if oracle == Oracle::F { 1.0 } else { 2.0 },
             epsilon: 0.02,
             tolerance: 1e-6,
-            ..HierarchicalParams::default()
+            ..leaf_params()
         };
         solve(&scene, &accel, p)
     };
@@ -368,7 +376,7 @@ fn identical_for_any_thread_count() {
             .build()
             .expect("pool");
         pool.install(|| {
-            let s = solve(&scene, &accel, HierarchicalParams::default());
+            let s = solve(&scene, &accel, leaf_params());
             (s.engine().radiosity().to_vec(), s.stats())
         })
     };
@@ -386,12 +394,12 @@ fn scaled_scenes_give_the_same_answer() {
     // whether an element of edge 1/8 may split is a tie that rounding decides differently at other scales).
     let params = |scale: f64| {
         [
-            HierarchicalParams::default(),
+            leaf_params(),
             HierarchicalParams {
                 oracle: Oracle::F,
                 epsilon: 0.02,
                 min_element_size: Some(scale / 16.0),
-                ..HierarchicalParams::default()
+                ..leaf_params()
             },
         ]
     };
@@ -426,7 +434,14 @@ fn scaled_scenes_give_the_same_answer() {
 fn radiosity_at_finds_each_leaf_and_gouraud_is_continuous() {
     let scene = shadow_box();
     let accel = Accel::new(&scene);
-    let constant = solve(&scene, &accel, HierarchicalParams::coarse());
+    let constant = solve(
+        &scene,
+        &accel,
+        HierarchicalParams {
+            reconstruction: Reconstruction::Constant,
+            ..HierarchicalParams::coarse()
+        },
+    );
     let e = constant.engine();
     for i in 0..e.nodes().len() as u32 {
         if e.is_leaf(i) {
@@ -471,14 +486,14 @@ fn bad_parameters_are_errors_that_name_them() {
             "epsilon",
             HierarchicalParams {
                 epsilon: -1.0,
-                ..HierarchicalParams::default()
+                ..leaf_params()
             },
         ),
         (
             "min_element_size",
             HierarchicalParams {
                 min_element_size: Some(f64::NAN),
-                ..HierarchicalParams::default()
+                ..leaf_params()
             },
         ),
         (
@@ -486,7 +501,7 @@ fn bad_parameters_are_errors_that_name_them() {
             HierarchicalParams {
                 quadrature: 1,
                 oracle: Oracle::Variation,
-                ..HierarchicalParams::default()
+                ..leaf_params()
             },
         ),
     ];
@@ -498,7 +513,7 @@ fn bad_parameters_are_errors_that_name_them() {
     }
     let tiny = HierarchicalParams {
         memory_budget_mib: 1e-3,
-        ..HierarchicalParams::default()
+        ..leaf_params()
     };
     let mut s = HierarchicalSolver::new(&scene, &accel, tiny, 0).expect("valid");
     let mut result = Ok(Step::Continue);

@@ -9,7 +9,8 @@ use glam::{DVec3, dvec3};
 use radlab_hierarchical::{HierarchicalParams, HierarchicalSolver, NodeKind, Patch, Schedule};
 use radlab_scene::form_factor::{VisibilitySampling, point_polygon};
 use radlab_scene::{
-    Accel, Material, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin, sampling,
+    Accel, Material, Reconstruction, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin,
+    sampling,
 };
 use radlab_volume_cluster::{
     Alpha, ClusterNode, ClusterSolver, ClusterTree, Isotropic, Transfer, TransferMode,
@@ -31,12 +32,14 @@ fn params(transfer: Transfer, epsilon: f64) -> VolumeClusterParams {
         ..VolumeClusterParams::default()
     };
     p.engine.epsilon = epsilon;
+    p.engine.reconstruction = Reconstruction::Constant;
     p
 }
 
 /// Linking exactly the given roots, never refining: ε too large for any link, links made once.
 fn frozen() -> VolumeClusterParams {
     let mut p = VolumeClusterParams::default();
+    p.engine.reconstruction = Reconstruction::Constant;
     p.engine.epsilon = 1e30;
     p.engine.schedule = Schedule::TwoStage;
     p.engine.visibility = VisibilitySampling::Unoccluded;
