@@ -67,27 +67,36 @@ pub fn point_polygon_vector(x: DVec3, poly: &Polygon) -> DVec3 {
     contour_vector(&rel)
 }
 
-/// Σ_k γ_k û_k / 2π over the edges of the polygon with vertices `rel` (relative to the receiving point),
-/// oriented toward the side the polygon's front faces (counter-clockwise seen from the front).
-fn contour_vector(rel: &[DVec3]) -> DVec3 {
-    let mut s = DVec3::ZERO;
-    for k in 0..rel.len() {
+/// The edges of the polygon with vertices `rel` (relative to the receiving point) as (c, γ, |c|), with
+/// c = r̂_k × r̂_{k+1} and γ the angle the edge subtends: the terms of the contour integral.
+fn contour_edges(rel: &[DVec3]) -> impl Iterator<Item = (DVec3, f64, f64)> + '_ {
+    (0..rel.len()).filter_map(|k| {
         let a = rel[k].normalize_or_zero();
         let b = rel[(k + 1) % rel.len()].normalize_or_zero();
         let c = a.cross(b);
         let cl = c.length();
-        if cl > 1e-300 {
-            let gamma = cl.atan2(a.dot(b));
-            s -= c * (gamma / cl);
-        }
-    }
-    s / (2.0 * std::f64::consts::PI)
+        (cl > 1e-300).then(|| (c, cl.atan2(a.dot(b)), cl))
+    })
+}
+
+/// Σ_k γ_k û_k / 2π over the edges, oriented toward the side the polygon's front faces (counter-clockwise seen
+/// from the front).
+fn contour_vector(rel: &[DVec3]) -> DVec3 {
+    -contour_edges(rel)
+        .map(|(c, gamma, cl)| c * (gamma / cl))
+        .sum::<DVec3>()
+        / (2.0 * std::f64::consts::PI)
 }
 
 fn contour_sum(n: DVec3, rel: &[DVec3]) -> f64 {
-    // Vertices ordered counter-clockwise seen from the front give a vector toward the front's side; seen
-    // from behind a clipped piece the sign flips, hence the magnitude.
-    n.dot(contour_vector(rel)).abs().min(1.0)
+    // Each edge's term is projected on n before summing (summing the vector first cancels digits: a wall
+    // grazing the horizon lost 1e-10 of its tiny factor). Vertices ordered counter-clockwise seen from the
+    // front give a negative sum seen from in front; seen from behind a clipped piece the sign flips, hence the
+    // magnitude.
+    let s: f64 = contour_edges(rel)
+        .map(|(c, gamma, cl)| gamma * n.dot(c) / cl)
+        .sum();
+    (s.abs() / (2.0 * std::f64::consts::PI)).min(1.0)
 }
 
 #[cfg(test)]
