@@ -165,6 +165,16 @@ struct Exception {
 const EXCEPTIONS: &[Exception] = &[
     Exception {
         method: "face-cluster",
+        case: "scale 1e-4 and 1e4",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 2.7e-7 against 1e-9 (2026-11-30), since the volume hierarchy above the roots and the
+        // visibility rays that pass through the link ends' own surfaces (re-cast from each hit) came in.
+        reason: "the answer changes with the scene's scale by 2.7e-7: not yet diagnosed (suspect: the re-cast \
+                 rays through the ends' own surfaces, whose hit points carry the f32 traversal's relative error)",
+    },
+    Exception {
+        method: "face-cluster",
         case: "furnace sphere ρ=0.99",
         expect: Expect::Misses,
         overrides: &[],
@@ -224,32 +234,6 @@ const EXCEPTIONS: &[Exception] = &[
                  non-negative output only",
     },
     Exception {
-        method: "hierarchical",
-        case: "energy balance",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 6.0e-4 against 3e-4 (2026-11-30). Not a conservation defect in the code and not the solver's
-        // tolerance: on this room (no block) the imbalance is −6.38e-4 at tolerance 1e-6, 1e-8 and 1e-10 alike,
-        // the same at 2 × 2, 4 × 4 and 8 × 8 receiver points and at leaves ≥ h/16, ≥ h/64 or the default
-        // minimum size (−6.4e-4 … −6.8e-4), and falls with ε (−2.1e-4 at ε = 0.005): the source-side
-        // averaging error of the refinement (a source node sends its leaves' mean radiosity with its own mean
-        // form factor, off by the covariance of B and F over the node), which grows with how unevenly the
-        // sources are lit. The crate's 3e-4 was measured on a box with two large emitters and so does not
-        // bound this room with one small light; an a-priori bound on the covariance is not derived yet.
-        reason: "source-side averaging conserves energy only to the refinement's accuracy, proportional to ε \
-                 (−6.4e-4 at ε = 0.02, −2.1e-4 at ε = 0.005 on this room, independent of tolerance, receiver \
-                 quadrature and minimum size); the crate's stated 3e-4 was measured on a scene with evenly lit \
-                 sources and does not transfer",
-    },
-    Exception {
-        method: "hierarchical",
-        case: "emitters 1e6 apart: balance",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 5.8e-4 against 3e-4 (2026-11-30).
-        reason: "as for the energy balance: source-side averaging, about 6 times the crate's stated 1e-4",
-    },
-    Exception {
         method: "pathtrace",
         case: "furnace cube ρ=0.999",
         expect: Expect::Finite,
@@ -267,17 +251,6 @@ const EXCEPTIONS: &[Exception] = &[
         // At 4 × 256 paths per point it passed: 8.4e-2 against 2.0e-1, in 80 s.
         reason: "paths last 1000 bounces (as for the cube); checked at 16 paths per point for finite, \
                  non-negative output only",
-    },
-    Exception {
-        method: "volume-cluster",
-        case: "sliver (aspect 1e4) in a furnace",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 5.2e-2 against 1e-2 (2026-11-30); 3.3e-2 once cluster links are evaluated at a patch's
-        // Gauss points (radlab-volume-cluster tests/sliver.rs, debug build).
-        reason: "the sliver (relative area 1.7e-5) is a direct child of the root cluster and keeps point \
-                 approximations from the octant clusters above it, which the power norm never refines for so \
-                 small a receiver; at distances comparable to their size they make its row sum 1.037",
     },
 ];
 
