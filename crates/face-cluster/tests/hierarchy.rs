@@ -6,6 +6,7 @@ use glam::{DVec3, dvec3};
 use radlab_face_cluster::{
     FaceClusterError, FaceClusterParams, FaceClusterTree, bounds::angle_between, digest,
 };
+use radlab_scene::test_scenes::scaled;
 use radlab_scene::{Material, Scene, SceneBuilder, builtin, sampling};
 
 fn build(scene: &Scene) -> FaceClusterTree {
@@ -18,24 +19,6 @@ fn bumpy() -> Scene {
 
 fn terrain() -> Scene {
     builtin("terrain?faces=2000").expect("builtin")
-}
-
-/// The scene with every vertex multiplied by `s` (same indices and materials).
-fn scaled(scene: &Scene, s: f64) -> Scene {
-    let mut b = SceneBuilder::new(&scene.name);
-    for m in &scene.materials {
-        b.add_material(m.clone()).expect("valid");
-    }
-    for &v in &scene.vertices {
-        b.add_vertex(v * s, "scaled").expect("finite");
-    }
-    for f in &scene.faces {
-        let added = b
-            .add_polygon(f.vertex_indices(), f.material, "scaled")
-            .expect("valid");
-        assert_eq!(added, 1, "a face changed under scaling");
-    }
-    b.build().expect("faces")
 }
 
 /// Per node: first face, face count, first child, parent.

@@ -39,6 +39,7 @@ use std::fmt::Write as _;
 use radlab_runner::methods::{MethodInfo, methods};
 use radlab_scene::form_factor::point_polygon;
 use radlab_scene::glam::{DVec3, dvec3};
+use radlab_scene::test_scenes::{add_box, box_sides, grid, hollow_box, material, room, scaled};
 use radlab_scene::{
     Accel, EvalPoint, FaceId, Material, Rgb, Scene, SceneBuilder, Solver, Step, builtin,
     evaluation_points,
@@ -263,48 +264,6 @@ fn exception(method: &str, case: &str) -> Option<&'static Exception> {
 // ---------------------------------------------------------------------------------------------------------
 // Scenes.
 
-fn material(b: &mut SceneBuilder, name: &str, rho: f64, e: f64) -> u32 {
-    b.add_material(Material::new(name, Rgb::splat(rho), Rgb::splat(e)).expect("material"))
-        .expect("material")
-}
-
-/// An n × n grid of quads over o + s u + t v (s, t ∈ [0, 1]), normal along u × v.
-fn grid(b: &mut SceneBuilder, o: DVec3, u: DVec3, v: DVec3, n: usize, m: u32) {
-    for j in 0..n {
-        for i in 0..n {
-            let p = |di: usize, dj: usize| {
-                o + u * ((i + di) as f64 / n as f64) + v * ((j + dj) as f64 / n as f64)
-            };
-            b.add_polygon_points(&[p(0, 0), p(1, 0), p(1, 1), p(0, 1)], m, "grid")
-                .expect("quad");
-        }
-    }
-}
-
-/// The six faces of the box [lo, hi] as (origin, u, v) with u × v pointing outward (or inward).
-fn box_sides(lo: DVec3, hi: DVec3, outward: bool) -> Vec<(DVec3, DVec3, DVec3)> {
-    let d = hi - lo;
-    let (x, y, z) = (dvec3(d.x, 0., 0.), dvec3(0., d.y, 0.), dvec3(0., 0., d.z));
-    let sides = [
-        (lo, y, x),     // z = lo, normal −z
-        (lo + z, x, y), // z = hi, +z
-        (lo, z, y),     // x = lo, −x
-        (lo + x, y, z), // x = hi, +x
-        (lo, x, z),     // y = lo, −y
-        (lo + y, z, x), // y = hi, +y
-    ];
-    sides
-        .into_iter()
-        .map(|(o, u, v)| if outward { (o, u, v) } else { (o, v, u) })
-        .collect()
-}
-
-fn add_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3, n: usize, m: u32, outward: bool) {
-    for (o, u, v) in box_sides(lo, hi, outward) {
-        grid(b, o, u, v, n, m);
-    }
-}
-
 /// A furnace cube of edge 1 (inward faces, 2 × 2 quads per side, h = 0.5) whose z = 0 side is replaced by
 /// `floor` (a list of polygons covering the unit square).
 fn furnace_with_floor(rho: f64, floor: &[Vec<DVec3>]) -> Scene {
@@ -321,61 +280,6 @@ fn furnace_with_floor(rho: f64, floor: &[Vec<DVec3>]) -> Scene {
         } else {
             grid(&mut b, o, u, v, 2, m);
         }
-    }
-    b.build().expect("scene")
-}
-
-/// The closed unit room (inward faces, 2 × 2 quads per side, h = 0.5) with coloured reflectances; one ceiling
-/// quad is the light (so every face's back is inside a wall and nothing is absorbed by a back); `extra` adds
-/// objects. Every reflectance is positive.
-fn room(name: &str, extra: &dyn Fn(&mut SceneBuilder)) -> Scene {
-    let mut b = SceneBuilder::new(name);
-    let refl = [0.7, 0.4, 0.5, 0.6, 0.5, 0.3];
-    let light = material(&mut b, "light", 0.3, 10.0);
-    for (k, (o, u, v)) in box_sides(DVec3::ZERO, DVec3::ONE, false)
-        .into_iter()
-        .enumerate()
-    {
-        let m = material(&mut b, &format!("wall{k}"), refl[k], 0.0);
-        for j in 0..2 {
-            for i in 0..2 {
-                let p = |di: usize, dj: usize| {
-                    o + u * ((i + di) as f64 / 2.0) + v * ((j + dj) as f64 / 2.0)
-                };
-                // The ceiling (side 1, z = 1) has its quad nearest the origin as the light.
-                let mat = if k == 1 && i == 0 && j == 0 { light } else { m };
-                b.add_polygon_points(&[p(0, 0), p(1, 0), p(1, 1), p(0, 1)], mat, "room")
-                    .expect("quad");
-            }
-        }
-    }
-    extra(&mut b);
-    b.build().expect("scene")
-}
-
-/// A closed box (outward faces) on [lo, hi] with a closed unlit interior: inward faces inset by 1e-3 of its size.
-fn hollow_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3) {
-    let m = material(b, "box", 0.6, 0.0);
-    add_box(b, lo, hi, 1, m, true);
-    let inside = material(b, "interior", 0.9, 0.0);
-    let inset = 1e-3 * (hi - lo).max_element();
-    add_box(b, lo + inset, hi - inset, 1, inside, false);
-}
-
-fn scaled(scene: &Scene, s: f64) -> Scene {
-    let mut b = SceneBuilder::new(&format!("{} x {s}", scene.name));
-    let mut mats = Vec::new();
-    for f in 0..scene.face_count() {
-        let mat = scene.material(f);
-        let id = match mats.iter().position(|n: &String| *n == mat.name) {
-            Some(i) => i as u32,
-            None => {
-                mats.push(mat.name.clone());
-                b.add_material(mat.clone()).expect("material")
-            }
-        };
-        let pts: Vec<DVec3> = scene.polygon(f).vertices().iter().map(|p| *p * s).collect();
-        b.add_polygon_points(&pts, id, "scaled").expect("face");
     }
     b.build().expect("scene")
 }

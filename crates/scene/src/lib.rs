@@ -27,6 +27,7 @@ pub mod reconstruction;
 pub mod sampling;
 pub mod scene;
 pub mod solver;
+pub mod test_scenes;
 
 pub use accel::{Accel, AccelPreset, Hit, Ray};
 pub use camera::{Camera, CameraFrame, Image, render_solution};
