@@ -188,8 +188,10 @@ const EXCEPTIONS: &[Exception] = &[
         case: "furnace sphere ρ=0.999",
         expect: Expect::Misses,
         overrides: &[],
-        // Measured 3.6e-1 (release, 2026-11-30).
-        reason: "as at rho = 0.99: the vector transfer's energy loss on curved clusters, amplified by 1/(1 - rho)",
+        // Measured 3.6e-1 low (release, 2026-11-30, morning); 2.2e16 (debug, 2026-11-30, evening) since the
+        // volume hierarchy above the roots and the near-source irradiance vectors came in.
+        reason: "the iteration diverges: some rows of the discrete operator now sum above 1/rho (the sphere's \
+                 curved clusters lost energy before, as at rho = 0.99); not yet diagnosed",
     },
     Exception {
         method: "face-cluster",
