@@ -66,10 +66,9 @@ impl VisibilitySampling {
 ///
 /// The n × n jittered samples on each element are paired through a random permutation of the strata, drawn
 /// afresh for every call: each ray then joins two points distributed uniformly and independently over the
-/// elements (for triangles and parallelograms), so the fraction is an unbiased estimate of the fraction of
-/// point pairs that see each other, while the samples stay stratified on both elements. Each pair is weighted
-/// by its kernel, w = cos θ cos θ' / r² ([`pair_kernel`]), so the estimate is the ratio estimator of the
-/// kernel-weighted visibility V = ∫∫ G v / ∫∫ G, the factor that turns the unoccluded form factor into the
+/// elements (for triangles and parallelograms), while the samples stay stratified on both elements. Each pair
+/// is weighted by its kernel, w = cos θ cos θ' / r² ([`pair_kernel`]), so the estimate is the ratio estimator
+/// (consistent, its bias falling as 1/n) of the kernel-weighted visibility V = ∫∫ G v / ∫∫ G, the factor that turns the unoccluded form factor into the
 /// occluded one (Wallace, Elmquist & Haines 1989 weight their visibility samples by their form-factor share
 /// alike). An unweighted fraction biases V × F low wherever visibility and kernel are correlated: a pair behind
 /// either plane (zero kernel) would count as blocked, and near-horizon pairs (small kernel) are the ones a
