@@ -68,6 +68,59 @@ pub trait TransferMode: Sync + Send + Debug + Default {
     fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, Self::Exitance);
 }
 
+/// A transfer whose states are scalar irradiance and radiosity (isotropic and α clusters): only where a cluster
+/// receiver's links are evaluated, the coefficient there and what a cluster source sends differ; the scalar
+/// gather, push (children inherit the parent's irradiance unchanged) and reflection are shared.
+pub trait ScalarTransfer: Sync + Send + Debug + Default {
+    /// Where links to a cluster receiver are evaluated.
+    const AT_CLUSTER: GatherAt;
+    /// The coefficient at a cluster receiver: link coefficient `g` = V/(π r²), direction `d` source → receiver.
+    fn at_cluster(g: f64, d: DVec3) -> f64;
+    /// J_S(d) of cluster `src` from the radiosity `b` of every node.
+    fn cluster_flux(view: &NodeView<'_, ClusterNode<'_>>, b: &[Rgb], src: u32, d: DVec3) -> Rgb;
+}
+
+impl<S: ScalarTransfer> TransferMode for S {
+    type Irradiance = Rgb;
+    type Exitance = ();
+    type Coefficient = f64;
+    const AT_CLUSTER: GatherAt = <S as ScalarTransfer>::AT_CLUSTER;
+
+    fn scalar(c: f64) -> f64 {
+        c
+    }
+
+    fn at_cluster(g: f64, d: DVec3) -> f64 {
+        <S as ScalarTransfer>::at_cluster(g, d)
+    }
+
+    fn cluster_flux(
+        view: &NodeView<'_, ClusterNode<'_>>,
+        b: &[Rgb],
+        _x: &[()],
+        src: u32,
+        d: DVec3,
+    ) -> Rgb {
+        <S as ScalarTransfer>::cluster_flux(view, b, src, d)
+    }
+
+    fn deliver(h: &mut Rgb, c: &f64, flux: Rgb) {
+        *h += *c * flux;
+    }
+
+    fn push(_parent: &ClusterNode<'_>, _child: &ClusterNode<'_>, h: &Rgb) -> Rgb {
+        *h
+    }
+
+    fn reflect(leaf: &ClusterNode<'_>, h: &Rgb, with_emission: bool) -> (Rgb, ()) {
+        (reflect_node(leaf, *h, with_emission), ())
+    }
+
+    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, ()) {
+        (leaf.reflectance(), ())
+    }
+}
+
 /// The transport, generic over the transfer mode.
 #[derive(Debug)]
 pub struct ClusterTransport<'a, M> {

@@ -11,34 +11,21 @@ use radlab_hierarchical::{GatherAt, NodeKind, NodeView};
 use radlab_scene::Rgb;
 
 use crate::cluster_node::ClusterNode;
-use crate::cluster_transport::{TransferMode, reflect_node};
+use crate::cluster_transport::ScalarTransfer;
 
 /// Oriented clusters.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Alpha;
 
-impl TransferMode for Alpha {
-    type Irradiance = Rgb;
-    type Exitance = ();
-    type Coefficient = f64;
+impl ScalarTransfer for Alpha {
     const AT_CLUSTER: GatherAt = GatherAt::Faces;
-
-    fn scalar(c: f64) -> f64 {
-        c
-    }
 
     fn at_cluster(_g: f64, _d: DVec3) -> f64 {
         // Never used: links to a cluster are evaluated at its faces.
         0.0
     }
 
-    fn cluster_flux(
-        view: &NodeView<'_, ClusterNode<'_>>,
-        b: &[Rgb],
-        _x: &[()],
-        src: u32,
-        d: DVec3,
-    ) -> Rgb {
+    fn cluster_flux(view: &NodeView<'_, ClusterNode<'_>>, b: &[Rgb], src: u32, d: DVec3) -> Rgb {
         let mut faces = Vec::new();
         view.faces_below(src, &mut faces);
         let mut j = Rgb::ZERO;
@@ -49,21 +36,5 @@ impl TransferMode for Alpha {
             }
         }
         j
-    }
-
-    fn deliver(h: &mut Rgb, c: &f64, flux: Rgb) {
-        *h += *c * flux;
-    }
-
-    fn push(_parent: &ClusterNode<'_>, _child: &ClusterNode<'_>, h: &Rgb) -> Rgb {
-        *h
-    }
-
-    fn reflect(leaf: &ClusterNode<'_>, h: &Rgb, with_emission: bool) -> (Rgb, ()) {
-        (reflect_node(leaf, *h, with_emission), ())
-    }
-
-    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, ()) {
-        (leaf.reflectance(), ())
     }
 }

@@ -10,49 +10,20 @@ use radlab_hierarchical::{GatherAt, NodeKind, NodeView};
 use radlab_scene::Rgb;
 
 use crate::cluster_node::ClusterNode;
-use crate::cluster_transport::{TransferMode, reflect_node};
+use crate::cluster_transport::ScalarTransfer;
 
 /// Isotropic clusters.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Isotropic;
 
-impl TransferMode for Isotropic {
-    type Irradiance = Rgb;
-    type Exitance = ();
-    type Coefficient = f64;
+impl ScalarTransfer for Isotropic {
     const AT_CLUSTER: GatherAt = GatherAt::Receiver;
-
-    fn scalar(c: f64) -> f64 {
-        c
-    }
 
     fn at_cluster(g: f64, _d: DVec3) -> f64 {
         g / 4.0
     }
 
-    fn cluster_flux(
-        view: &NodeView<'_, ClusterNode<'_>>,
-        b: &[Rgb],
-        _x: &[()],
-        src: u32,
-        _d: DVec3,
-    ) -> Rgb {
+    fn cluster_flux(view: &NodeView<'_, ClusterNode<'_>>, b: &[Rgb], src: u32, _d: DVec3) -> Rgb {
         b[src as usize] * (view.nodes[src as usize].area() / 4.0)
-    }
-
-    fn deliver(h: &mut Rgb, c: &f64, flux: Rgb) {
-        *h += *c * flux;
-    }
-
-    fn push(_parent: &ClusterNode<'_>, _child: &ClusterNode<'_>, h: &Rgb) -> Rgb {
-        *h
-    }
-
-    fn reflect(leaf: &ClusterNode<'_>, h: &Rgb, with_emission: bool) -> (Rgb, ()) {
-        (reflect_node(leaf, *h, with_emission), ())
-    }
-
-    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, ()) {
-        (leaf.reflectance(), ())
     }
 }
