@@ -12,7 +12,7 @@
 //! A step is one unit of work: a linking step, a refinement pass or a solution pass. Transitions that need no
 //! work happen inside the step that follows them.
 
-use radlab_scene::{SolveError, Step};
+use radlab_scene::{Accel, SolveError, Step};
 
 use crate::hierarchy::{Engine, Phase};
 use crate::node::NodeKind;
@@ -30,6 +30,19 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     fn lazy(&self) -> bool {
         self.params.lazy_linking && self.params.schedule != Schedule::TwoStage
+    }
+
+    /// [`Engine::step`], adding the rays `accel` cast during it to `rays` (also when the step fails), so every
+    /// solver on the engine counts its rays the same way.
+    pub fn step_counting_rays(
+        &mut self,
+        accel: &Accel,
+        rays: &mut u64,
+    ) -> Result<Step, SolveError> {
+        let before = accel.rays_cast();
+        let s = self.step();
+        *rays += accel.rays_cast().saturating_sub(before);
+        s
     }
 
     /// One unit of work of the schedule.

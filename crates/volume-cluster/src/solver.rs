@@ -130,10 +130,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
     }
 
     fn step(&mut self) -> Result<Step, SolveError> {
-        let before = self.accel.rays_cast();
-        let s = self.engine.step();
-        self.rays += self.accel.rays_cast().saturating_sub(before);
-        let s = s?;
+        let s = self.engine.step_counting_rays(self.accel, &mut self.rays)?;
         self.output.update(&self.engine, self.scene.face_count());
         Ok(s)
     }
