@@ -42,11 +42,16 @@ fn mean_abs(reference: &[Rgb], weights: &[f64]) -> (f64, f64, f64) {
     (l1, l2, l1 / (3.0 * wsum.max(f64::MIN_POSITIVE)))
 }
 
+/// The denominator floor of the max error: `MAX_ERROR_FLOOR` times the area-mean reference radiosity R̄.
+pub fn max_error_floor(reference: &[Rgb], weights: &[f64]) -> f64 {
+    (MAX_ERROR_FLOOR * mean_abs(reference, weights).2).max(f64::MIN_POSITIVE)
+}
+
 /// Errors of `values` against `reference`.
 pub fn errors(values: &[Rgb], reference: &[Rgb], weights: &[f64]) -> Errors {
     debug_assert_eq!(values.len(), reference.len());
-    let (r1, r2, mean) = mean_abs(reference, weights);
-    let floor = (MAX_ERROR_FLOOR * mean).max(f64::MIN_POSITIVE);
+    let (r1, r2, _) = mean_abs(reference, weights);
+    let floor = max_error_floor(reference, weights);
     let mut e1 = 0.0;
     let mut e2 = 0.0;
     let mut emax: f64 = 0.0;
@@ -85,8 +90,8 @@ pub fn errors(values: &[Rgb], reference: &[Rgb], weights: &[f64]) -> Errors {
 
 /// The noise floor of a reference with standard errors `std_error`.
 pub fn noise_floor(reference: &[Rgb], std_error: &[Rgb], weights: &[f64]) -> Errors {
-    let (r1, r2, mean) = mean_abs(reference, weights);
-    let floor = (MAX_ERROR_FLOOR * mean).max(f64::MIN_POSITIVE);
+    let (r1, r2, _) = mean_abs(reference, weights);
+    let floor = max_error_floor(reference, weights);
     let s1: f64 = std_error
         .iter()
         .zip(weights)

@@ -190,6 +190,35 @@ pub fn trace_path(dir: &Path, id: &str) -> PathBuf {
     dir.join("runs").join(format!("{id}.trace.csv"))
 }
 
+/// Path of a run's per-point answers (the final evaluation beside the reference).
+pub fn points_path(dir: &Path, id: &str) -> PathBuf {
+    dir.join("runs").join(format!("{id}.points.csv"))
+}
+
+/// One evaluation point of a run's final answer: where it is, the reference with its standard error, the
+/// method's value and the point's error as the max column measures it.
+#[derive(serde::Serialize)]
+struct PointRow {
+    point: usize,
+    face: usize,
+    x: f64,
+    y: f64,
+    z: f64,
+    ref_r: f64,
+    ref_g: f64,
+    ref_b: f64,
+    se_r: f64,
+    se_g: f64,
+    se_b: f64,
+    r: f64,
+    g: f64,
+    b: f64,
+    /// max over channels of |B − R| / max(|R|, floor), the max column's per-point term.
+    rel_error: f64,
+    /// max over channels of |B − R| / s (the reference's standard error; infinite where s = 0 and B ≠ R).
+    z_score: f64,
+}
+
 /// Path of a run's image.
 pub fn image_path(dir: &Path, id: &str) -> PathBuf {
     dir.join("images").join(format!("{id}.exr"))
@@ -242,7 +271,7 @@ fn evaluate(
     points: &[EvalPoint],
     reference: &[Rgb],
     weights: &[f64],
-) -> (Errors, f64, u64) {
+) -> (Errors, f64, u64, Vec<Rgb>) {
     use rayon::prelude::*;
     let (t0, rays0) = (Instant::now(), accel.rays_cast());
     let values: Vec<Rgb> = points
@@ -253,7 +282,62 @@ fn evaluate(
         t0.elapsed().as_secs_f64(),
         accel.rays_cast().saturating_sub(rays0),
     );
-    (metrics::errors(&values, reference, weights), secs, rays)
+    (
+        metrics::errors(&values, reference, weights),
+        secs,
+        rays,
+        values,
+    )
+}
+
+/// Writes a run's final answers at the evaluation points beside the reference (`runs/<id>.points.csv`).
+fn write_points(
+    path: &Path,
+    points: &[EvalPoint],
+    reference: &[Rgb],
+    std_error: &[Rgb],
+    values: &[Rgb],
+    weights: &[f64],
+) -> Result<()> {
+    let floor = metrics::max_error_floor(reference, weights);
+    write_bytes(path, |w| {
+        let mut out = csv::Writer::from_writer(w);
+        for (i, (((p, r), s), v)) in points
+            .iter()
+            .zip(reference)
+            .zip(std_error)
+            .zip(values)
+            .enumerate()
+        {
+            let d = (*v - *r).abs();
+            let rel_error = (0..3)
+                .map(|c| d[c] / r[c].abs().max(floor))
+                .fold(0.0, f64::max);
+            let z_score = (0..3)
+                .map(|c| if d[c] == 0.0 { 0.0 } else { d[c] / s[c] })
+                .fold(0.0, f64::max);
+            out.serialize(PointRow {
+                point: i,
+                face: p.face,
+                x: p.point.x,
+                y: p.point.y,
+                z: p.point.z,
+                ref_r: r.x,
+                ref_g: r.y,
+                ref_b: r.z,
+                se_r: s.x,
+                se_g: s.y,
+                se_b: s.z,
+                r: v.x,
+                g: v.y,
+                b: v.z,
+                rel_error,
+                z_score,
+            })?;
+        }
+        out.flush()?;
+        Ok(())
+    })
 }
 
 /// Runs a job in this process and writes its files. Failures of the method become the run's outcome.
@@ -277,7 +361,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let accel = Accel::new(&scene);
     let points =
         radlab_scene::evaluation_points(&scene, job.evaluation.points, job.evaluation.seed);
-    let (reference, _) = reference::read_cache(&job.reference_file, points.len())?;
+    let (reference, std_error) = reference::read_cache(&job.reference_file, points.len())?;
     let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
     let method = crate::methods::find(&spec.method)?;
     let setup = std::time::Instant::now();
@@ -298,14 +382,17 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let growth = job.evaluation.growth;
     let mut next_eval = 0.0;
     let mut last_answer = (0.0, 0u64);
+    let mut last_values = Vec::new();
     // The after-step hook evaluates outside the solver's timed region, timing the answering separately;
     // reaching the target error ends the run.
     let run = solve_loop::run(&mut *solver, limits, |s, rec| {
         let wall = rec.wall.as_secs_f64();
         if (rec.step % every == 0 && wall >= next_eval) || rec.step == 1 {
-            let (e, secs, rays) = evaluate(s.solution(), &accel, &points, &reference, &weights);
+            let (e, secs, rays, values) =
+                evaluate(s.solution(), &accel, &points, &reference, &weights);
             last_eval = e;
             last_answer = (secs, rays);
+            last_values = values;
             trace.push(row(spec, rec, last_eval, last_answer));
             next_eval = wall * growth;
             if target > 0.0 && last_eval.l1 <= target {
@@ -328,9 +415,11 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         Err(e) => return Err(e),
     };
     if trace.last().is_none_or(|t| t.step != rec.step) {
-        let (e, secs, rays) = evaluate(solver.solution(), &accel, &points, &reference, &weights);
+        let (e, secs, rays, values) =
+            evaluate(solver.solution(), &accel, &points, &reference, &weights);
         last_eval = e;
         last_answer = (secs, rays);
+        last_values = values;
         trace.push(row(spec, &rec, last_eval, last_answer));
     }
     (result.answer_s, result.answer_rays) = last_answer;
@@ -355,6 +444,14 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         out.flush()?;
         Ok(())
     })?;
+    write_points(
+        &points_path(&job.dir, &result.id),
+        &points,
+        &reference,
+        &std_error,
+        &last_values,
+        &weights,
+    )?;
     if job.outputs.images
         && let Some(camera) = super::images::camera_for(&scene, &job.outputs)
     {
