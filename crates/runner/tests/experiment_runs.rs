@@ -118,6 +118,23 @@ fn tiny_experiment_end_to_end_then_skips() {
         assert_eq!(r.reference, "pathtrace");
         assert!(r.floor_l1 > 0.0 && r.l1.is_finite(), "{r:?}");
     }
+    // Each run's per-point file holds every evaluation point, and its worst point is the run's max error.
+    for r in &results {
+        let p = out.join("runs").join(format!("{}.points.csv", r.id));
+        let mut rdr = csv::Reader::from_path(&p).expect("points.csv");
+        let worst = rdr
+            .deserialize::<std::collections::HashMap<String, f64>>()
+            .map(|row| row.expect("row")["rel_error"])
+            .fold((0u64, 0.0f64), |(n, m), e| (n + 1, m.max(e)));
+        assert_eq!(worst.0, r.points, "{}", p.display());
+        assert!(
+            (worst.1 - r.max).abs() <= 1e-12 * r.max.max(1.0),
+            "{}: worst point {} against the run's max {}",
+            p.display(),
+            worst.1,
+            r.max
+        );
+    }
     // Run again: everything is skipped.
     let o = run_ok(tmp.path(), &cfg, &out);
     assert!(
