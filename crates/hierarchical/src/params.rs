@@ -202,7 +202,7 @@ impl MethodParams for HierarchicalParams {
         vec![
             (
                 "epsilon",
-                "refinement threshold on the oracle's estimate, dimensionless (default 0.01)",
+                "refinement threshold on the oracle's estimate, dimensionless",
             ),
             (
                 "oracle",
@@ -256,8 +256,8 @@ impl MethodParams for HierarchicalParams {
             (
                 "reconstruction",
                 "point answers: constant | gouraud (vertex-interpolated) | final-gather (one more gather from every \
-                 leaf, exact point-to-polygon factors and rays; its cost is charged when answering); default \
-                 final-gather (Cornell box, 512 points, default epsilon: relative L1 3.1% against 7.0% constant \
+                 leaf, exact point-to-polygon factors and rays; its cost is charged when answering); \
+                 hierarchical's and volume-cluster's default is final-gather, chosen by measurement (Cornell box, 512 points, default epsilon: relative L1 3.1% against 7.0% constant \
                  and 6.8% gouraud for hierarchical, 2.5% / 8.0% / 7.9% for volume clusters; worst point 27% \
                  against 2798% constant; the room of scenes/room.toml, solve stopped at 120 s: 4.3% against \
                  8.8% and 9.1%); answering costs a kernel per leaf and query, so images of fine solutions are \

@@ -102,3 +102,51 @@ fn no_source_cites_notes_outside_the_repository() {
         "citations a reader of the code cannot follow: {hits:#?}"
     );
 }
+
+/// The value a parameter's doc line states as its default, `(default X)` or `(default: X)` with X one word
+/// closing the parenthesis; None when the doc states none in that form (e.g. "(default: 2 x element_size)").
+fn stated_default(doc: &str) -> Option<String> {
+    let i = doc.find("(default")?;
+    let rest = doc[i + "(default".len()..].trim_start_matches([':', ' ']);
+    let word = &rest[..rest.find(')')?];
+    (!word.is_empty() && !word.contains(' ')).then(|| word.to_string())
+}
+
+#[test]
+fn documented_defaults_match_the_defaults_in_use() {
+    // `radlab methods` prints each parameter's default (from the params type) beside its doc line; a number
+    // or boolean the doc line states as the default must be that value, for every method (shared doc lines
+    // copied from another method's parameters must say that method's defaults).
+    let mut wrong = Vec::new();
+    for m in radlab_runner::methods::methods() {
+        for p in (m.params)() {
+            let Some(stated) = stated_default(&p.doc) else {
+                continue;
+            };
+            let actual = p.default.trim_matches('"');
+            let same = match (stated.parse::<f64>(), actual.parse::<f64>()) {
+                (Ok(a), Ok(b)) => a == b,
+                (Ok(_), Err(_)) => false,
+                (Err(_), _) => stated == actual,
+            };
+            if !same {
+                wrong.push(format!(
+                    "{} {}: doc says (default {stated}), default is {}",
+                    m.name, p.name, p.default
+                ));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+#[test]
+fn stated_defaults_are_parsed() {
+    assert_eq!(
+        stated_default("dimensionless (default 0.01)").as_deref(),
+        Some("0.01")
+    );
+    assert_eq!(stated_default("x (default: true)").as_deref(), Some("true"));
+    assert_eq!(stated_default("x (default: scene diagonal / 150)"), None);
+    assert_eq!(stated_default("no default here"), None);
+}
