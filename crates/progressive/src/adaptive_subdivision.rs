@@ -37,35 +37,99 @@ pub(crate) fn contrast(a: Rgb, b: Rgb) -> f64 {
     if m > 0.0 { (ga - gb).abs() / m } else { 0.0 }
 }
 
-/// Neighbouring leaf pairs (a < b), sorted, each once.
+/// The neighbour pairs (e.min(o), e.max(o)) that leaf `e`'s edge probes find.
+fn probe(scene: &Scene, mesh: &Mesh, locator: &ElementLocator, e: u32) -> Vec<(u32, u32)> {
+    let el = &mesh.elements[e as usize];
+    let n = scene.faces[el.face as usize].normal;
+    let v = el.polygon.vertices();
+    let offset = PROBE_OFFSET * el.polygon.max_edge();
+    let mut out = Vec::with_capacity(2 * v.len());
+    for k in 0..v.len() {
+        let (a, b) = (v[k], v[(k + 1) % v.len()]);
+        let outward = (b - a).cross(n).normalize_or_zero();
+        for t in PROBE_AT {
+            let p: DVec3 = a.lerp(b, t) + offset * outward;
+            match locator.locate_containing(mesh, el.face as usize, p) {
+                Some(o) if o != e => out.push((e.min(o), e.max(o))),
+                _ => {}
+            }
+        }
+    }
+    out
+}
+
+/// Neighbouring leaf pairs (a < b), sorted, each once: the union of every leaf's probes.
 pub(crate) fn neighbour_pairs(
     scene: &Scene,
     mesh: &Mesh,
     locator: &ElementLocator,
 ) -> Vec<(u32, u32)> {
-    let probe = |&e: &u32| -> Vec<(u32, u32)> {
-        let el = &mesh.elements[e as usize];
-        let n = scene.faces[el.face as usize].normal;
-        let v = el.polygon.vertices();
-        let offset = PROBE_OFFSET * el.polygon.max_edge();
-        let mut out = Vec::with_capacity(2 * v.len());
-        for k in 0..v.len() {
-            let (a, b) = (v[k], v[(k + 1) % v.len()]);
-            let outward = (b - a).cross(n).normalize_or_zero();
-            for t in PROBE_AT {
-                let p: DVec3 = a.lerp(b, t) + offset * outward;
-                match locator.locate_containing(mesh, el.face as usize, p) {
-                    Some(o) if o != e => out.push((e.min(o), e.max(o))),
-                    _ => {}
-                }
-            }
-        }
-        out
-    };
-    let mut pairs: Vec<(u32, u32)> = mesh.leaves.par_iter().flat_map_iter(probe).collect();
+    let mut pairs: Vec<(u32, u32)> = mesh
+        .leaves
+        .par_iter()
+        .flat_map_iter(|&e| probe(scene, mesh, locator, e))
+        .collect();
     pairs.sort_unstable();
     pairs.dedup();
     pairs
+}
+
+/// The neighbour pairs after the elements `split` (sorted) were split, from the pairs before: the union of
+/// every leaf's probes again, probing only the leaves whose probes can have changed. A leaf's probes change
+/// only if it is new (a child) or a probe of it landed in a split element, which then had a pair with it; the
+/// other leaves' probes, and the pairs they found, are as before. Equal to [`neighbour_pairs`] on the new
+/// leaves (tested), at the cost of the changed neighbourhood instead of the whole mesh.
+fn update_pairs(
+    scene: &Scene,
+    mesh: &Mesh,
+    locator: &ElementLocator,
+    pairs: &[(u32, u32)],
+    split: &[u32],
+    first_new: u32,
+) -> Vec<(u32, u32)> {
+    let was_split = |e: u32| split.binary_search(&e).is_ok();
+    let mut reprobe: Vec<u32> = (first_new..mesh.elements.len() as u32).collect();
+    let mut kept = Vec::with_capacity(pairs.len());
+    for &(a, b) in pairs {
+        match (was_split(a), was_split(b)) {
+            (false, false) => kept.push((a, b)),
+            (true, false) => reprobe.push(b),
+            (false, true) => reprobe.push(a),
+            (true, true) => {}
+        }
+    }
+    reprobe.sort_unstable();
+    reprobe.dedup();
+    kept.par_extend(
+        reprobe
+            .par_iter()
+            .flat_map_iter(|&e| probe(scene, mesh, locator, e)),
+    );
+    kept.sort_unstable();
+    kept.dedup();
+    kept
+}
+
+/// Splits the leaves `marked` (sorted) into four children each, appended in the order of their parents, and
+/// updates the leaf list (ascending); returns the index of the first child. Radiosities are the parents'.
+fn split_leaves(mesh: &mut Mesh, marked: &[u32]) -> usize {
+    let first_new = mesh.elements.len();
+    for &e in marked {
+        let parent = mesh.elements[e as usize];
+        mesh.elements[e as usize].first_child = mesh.elements.len() as u32;
+        for polygon in parent.polygon.split4() {
+            mesh.elements.push(Element {
+                polygon,
+                area: polygon.area(),
+                first_child: LEAF,
+                ..parent
+            });
+        }
+    }
+    mesh.leaves.retain(|&e| mesh.elements[e as usize].is_leaf());
+    mesh.leaves
+        .extend(first_new as u32..mesh.elements.len() as u32);
+    first_new
 }
 
 /// Settings of a refinement pass.
@@ -126,20 +190,7 @@ pub(crate) fn refine(
                 "raise min_element_size, adaptive_threshold or memory_budget_mib, or set adaptive = false",
             ));
         }
-        // Create the children, in the order of their parents.
-        let first_new = mesh.elements.len();
-        for &e in &marked {
-            let parent = mesh.elements[e as usize];
-            mesh.elements[e as usize].first_child = mesh.elements.len() as u32;
-            for polygon in parent.polygon.split4() {
-                mesh.elements.push(Element {
-                    polygon,
-                    area: polygon.area(),
-                    first_child: LEAF,
-                    ..parent
-                });
-            }
-        }
+        let first_new = split_leaves(mesh, &marked);
         // Re-gather: B_c = E + ρ Σ_j F_cj S_j over the patches shot so far, in shot order.
         let elements = &mesh.elements;
         let patches = &mesh.patches;
@@ -180,12 +231,8 @@ pub(crate) fn refine(
             patch.unshot += change;
             patch.lit |= change != Rgb::ZERO;
         }
-        // New leaves: drop the split ones, add the children, keep ascending order.
-        mesh.leaves.retain(|&e| mesh.elements[e as usize].is_leaf());
-        mesh.leaves
-            .extend(first_new as u32..mesh.elements.len() as u32);
         split_total += marked.len();
-        *pairs = neighbour_pairs(scene, mesh, locator);
+        *pairs = update_pairs(scene, mesh, locator, pairs, &marked, first_new as u32);
     }
 }
 
@@ -217,6 +264,43 @@ mod tests {
             assert_eq!(ea.face, eb.face);
             let d = (ea.polygon.centroid() - eb.polygon.centroid()).length();
             assert!((d - 0.25).abs() < 1e-12, "{d}");
+        }
+    }
+
+    #[test]
+    fn updated_pairs_equal_the_pairs_probed_afresh() {
+        // Split a scattered set of leaves six times over (so finer leaves border coarser ones, the case
+        // where one side's probes miss the other), updating the pairs after each round; they must equal the
+        // pairs found by probing every leaf again.
+        let scene = radlab_scene::builtin("furnace-cube?tessellation=2").expect("scene");
+        let mut mesh = Mesh::new(&scene, 1.0, 0.25, 1e9).expect("mesh");
+        let loc = ElementLocator::new(&scene, &mesh);
+        let mut pairs = neighbour_pairs(&scene, &mesh, &loc);
+        for round in 0..6u32 {
+            let marked: Vec<u32> = mesh
+                .leaves
+                .iter()
+                .copied()
+                .filter(|&e| {
+                    radlab_scene::sampling::mix64(u64::from(e) ^ u64::from(round)) % 3 == 0
+                })
+                .collect();
+            assert!(!marked.is_empty());
+            let first_new = split_leaves(&mut mesh, &marked);
+            pairs = update_pairs(&scene, &mesh, &loc, &pairs, &marked, first_new as u32);
+            let fresh = neighbour_pairs(&scene, &mesh, &loc);
+            let differ: Vec<_> = fresh
+                .iter()
+                .filter(|p| pairs.binary_search(p).is_err())
+                .collect();
+            assert!(
+                pairs == fresh,
+                "round {round}: {} updated pairs, {} probed afresh; missing: {:?}",
+                pairs.len(),
+                fresh.len(),
+                &differ[..differ.len().min(8)]
+            );
+            assert!(pairs.len() > 6 * 24);
         }
     }
 }
