@@ -282,7 +282,7 @@ mod tests {
                 .iter()
                 .copied()
                 .filter(|&e| {
-                    radlab_scene::sampling::mix64(u64::from(e) ^ u64::from(round)) % 3 == 0
+                    radlab_scene::sampling::mix64(u64::from(e) ^ u64::from(round)).is_multiple_of(3)
                 })
                 .collect();
             assert!(!marked.is_empty());
