@@ -58,8 +58,11 @@
 //! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 29% low with one visibility ray per link, 18% with
 //!   16 rays and 5% unoccluded (the ignored `room_of_cubes_furnace` test): visibility between closed parts is
 //!   most of it, not yet diagnosed.
-//! - The conformance suite's sliver and fan in a furnace are 54% off, and light reaches closed boxes flush
-//!   against walls (1.6e-4 of the lit maximum); not yet diagnosed.
+//! - The conformance suite's sliver in a furnace is 7.4% off (the fan and the 48-face furnace sphere up to
+//!   ρ = 0.999 pass since near faces are gathered per leaf and two-face self-links are refined). On finer
+//!   spheres the point transfers between curved clusters overestimate: a 432-face furnace sphere's rows sum to
+//!   1.002–1.006 (the centroids of curved clusters lie inside the surface, so 1/r² between them is too large),
+//!   which diverges at ρ = 0.999.
 //!
 //! Where the hierarchy does badly: a mesh without shared vertices (a triangle soup) has no dual edges, so every face
 //! stays its own root; fix the input (the OBJ reader welds equal positions). Closed or strongly curved
