@@ -263,6 +263,11 @@ fn point_coefficient(v: f64, r2: f64, area_r: f64, area_s: f64) -> f64 {
 
 const HALF_PI: f64 = std::f64::consts::FRAC_PI_2;
 
+/// Relative slack of the test for touching bounds, |c_R − c_S| ≤ (r_R + r_S)(1 + `TANGENT`): the bounding
+/// spheres of an octree's diagonal neighbours are exactly tangent, so without slack rounding decided whether
+/// they touch, and the answer changed with the scene's scale (2.7e-7 between × 1e-4 and × 1e4).
+const TANGENT: f64 = 1e-9;
+
 impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
     type Irradiance = [DVec3; 3];
     type Exitance = [DVec3; 3];
@@ -315,7 +320,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         let dist = between.length();
         let (ar, as_) = (recv.area(), src.area());
         let volume_end = recv.is_volume() || src.is_volume();
-        if dist <= rb.radius + sb.radius {
+        if dist <= (rb.radius + sb.radius) * (1.0 + TANGENT) {
             if volume_end {
                 // A volume and something within its box: refined until the ends are apart (Sillion 1995).
                 return Some(Link::overlapping(src_id));

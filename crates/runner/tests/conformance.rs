@@ -166,16 +166,6 @@ struct Exception {
 const EXCEPTIONS: &[Exception] = &[
     Exception {
         method: "face-cluster",
-        case: "scale 1e-4 and 1e4",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 2.7e-7 against 1e-9 (2026-11-30), since the volume hierarchy above the roots and the
-        // visibility rays that pass through the link ends' own surfaces (re-cast from each hit) came in.
-        reason: "the answer changes with the scene's scale by 2.7e-7: not yet diagnosed (suspect: the re-cast \
-                 rays through the ends' own surfaces, whose hit points carry the f32 traversal's relative error)",
-    },
-    Exception {
-        method: "face-cluster",
         case: "sliver (aspect 1e4) in a furnace",
         expect: Expect::Misses,
         overrides: &[],
