@@ -302,3 +302,76 @@ fn furnace_sphere_rows_sum_to_one() {
     }
     assert!(worst <= 1e-12, "a row sums to 1 ± {worst:.3e}");
 }
+
+/// Gouraud output under a distant light: the whole floor is one flat cluster with one link, so its irradiance
+/// vector e is one constant and B_v = ρ n·e at every vertex is the single link's closed form
+/// B = ρ E_l A_l / (π h²); interpolated anywhere on the floor it stays that value, to rounding.
+#[test]
+fn gouraud_is_exact_where_the_irradiance_vector_is_constant() {
+    let want = 0.5 * 10.0 * 0.04 / (std::f64::consts::PI * 25.0);
+    let scene = floor_and_light(10, 1.0);
+    let accel = Accel::new(&scene);
+    let p = params(&[
+        ("oracle", "f"),
+        ("epsilon", "0.05"),
+        ("reconstruction", "gouraud"),
+    ]);
+    let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
+    solve(&mut s);
+    assert_eq!(
+        s.engine().link_count(),
+        2,
+        "light → floor and floor → light"
+    );
+    for f in 0..scene.face_count() - 1 {
+        let poly = scene.polygon(f);
+        for (u, v) in [(0.0, 0.0), (0.3, 0.1), (0.1, 0.7), (1.0, 0.0)] {
+            let b = s.radiosity_at(f, poly.point_at(u, v)).x;
+            assert!((b - want).abs() <= 1e-12 * want, "face {f}: {b} vs {want}");
+        }
+    }
+}
+
+/// Gouraud output is continuous across the floor's shared edges: at every vertex, every face around it
+/// answers the same value (B_v of that vertex), while the values vary over the floor (the floor is split into
+/// clusters with their own irradiance vectors, none refined down to patches).
+#[test]
+fn gouraud_agrees_at_shared_vertices() {
+    let scene = floor_under_a_near_light(8);
+    let accel = Accel::new(&scene);
+    let p = params(&[
+        ("oracle", "f"),
+        ("epsilon", "0.02"),
+        ("reconstruction", "gouraud"),
+    ]);
+    let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
+    solve(&mut s);
+    let floor = scene.face_count() - 1;
+    let mut around: Vec<Vec<usize>> = vec![Vec::new(); scene.vertices.len()];
+    for f in 0..floor {
+        for &v in scene.faces[f].vertex_indices() {
+            around[v as usize].push(f);
+        }
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0_f64);
+    for (v, faces) in around.iter().enumerate() {
+        let values: Vec<f64> = faces
+            .iter()
+            .map(|&f| s.radiosity_at(f, scene.vertices[v]).x)
+            .collect();
+        for b in &values {
+            assert!(
+                (b - values[0]).abs() <= 1e-12 * values[0].abs(),
+                "vertex {v}: {values:?}"
+            );
+        }
+        if let Some(&b) = values.first() {
+            lo = lo.min(b);
+            hi = hi.max(b);
+        }
+    }
+    assert!(
+        hi > lo * 1.01,
+        "the field does not vary ({lo} … {hi}): the test would be vacuous"
+    );
+}
