@@ -71,7 +71,7 @@
 //! - The conformance suite's sliver in a furnace is 7.4% off: the sliver is a root of its own (1e-4 of the
 //!   scene's area) that keeps links from volume clusters of flat wall quads, whose isotropic transfer
 //!   (A/4) misjudges open groups of flat faces; its row sums to 0.918.
-
+//!
 //! Where the hierarchy does badly: a mesh without shared vertices (a triangle soup) has no dual edges, so every face
 //! stays its own root; fix the input (the OBJ reader welds equal positions). Closed or strongly curved
 //! nodes have a vector area near zero: their normal cones say so, and a solver must refine them.

@@ -14,7 +14,6 @@
 //! solution's own Gouraud values (its quadtree's corners), finer than its vertices but not matched to its
 //! neighbours'. The vertex fields are linear in k and computed at the first query after a step.
 
-use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
@@ -32,6 +31,9 @@ use serde::{Deserialize, Serialize};
 use crate::face_node::{FaceContext, FaceNode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
+
+/// Marks a tree node with no engine node.
+const NO_NODE: u32 = u32::MAX;
 
 /// Default ε of the face-cluster method (with the power error norm, as volume clusters).
 pub const DEFAULT_EPSILON: f64 = 1e-4;
@@ -138,8 +140,9 @@ pub struct FaceClusterSolver<'a> {
     ctx: Arc<FaceContext<'a>>,
     engine: Engine<FaceNode<'a>, VectorTransport<'a>>,
     output: SurfaceOutput,
-    /// Engine node of each tree node materialised so far.
-    engine_node: HashMap<u32, u32>,
+    /// Engine node of each tree node, [`NO_NODE`] where not materialised (indexed by tree node: an array
+    /// rather than a hash map, since output asks for it from every face).
+    engine_node: Vec<u32>,
     /// Whether point answers are interpolated from vertices (`reconstruction = "gouraud"`).
     gouraud: bool,
     /// Per scene vertex, the unit vertex normal and irradiance vector per channel (Gouraud output), computed
@@ -192,6 +195,7 @@ impl<'a> FaceClusterSolver<'a> {
         let min_size = p.resolve_min_size(scene)?;
         let roots = tree.roots();
         let scene_area: f64 = roots.clone().map(|r| tree.node(r).area).sum();
+        let tree_nodes = tree.nodes().len();
         let ctx = Arc::new(FaceContext::new(tree, scene));
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
         let transport = VectorTransport::new(
@@ -220,7 +224,7 @@ impl<'a> FaceClusterSolver<'a> {
             ctx,
             engine,
             output,
-            engine_node: HashMap::new(),
+            engine_node: vec![NO_NODE; tree_nodes],
             gouraud,
             vertex_fields: OnceLock::new(),
             scanned: 0,
@@ -235,7 +239,7 @@ impl<'a> FaceClusterSolver<'a> {
         let nodes = self.engine.nodes();
         for (i, n) in nodes.iter().enumerate().skip(self.scanned) {
             if let FaceNode::Cluster(c) = n {
-                self.engine_node.insert(c.id, i as u32);
+                self.engine_node[c.id as usize] = i as u32;
             }
         }
         self.scanned = nodes.len();
@@ -262,7 +266,8 @@ impl<'a> FaceClusterSolver<'a> {
         let tree = &self.ctx.tree;
         let mut n = tree.leaf_of_face(face);
         loop {
-            if let Some(&i) = self.engine_node.get(&(n as u32)) {
+            let i = self.engine_node[n];
+            if i != NO_NODE {
                 return Some(i);
             }
             n = tree.node(n).parent()?;
@@ -285,7 +290,7 @@ impl<'a> FaceClusterSolver<'a> {
             self.rays,
             self.output.bytes()
                 + self.ctx.bytes() as u64
-                + (self.engine_node.capacity() * 16) as u64,
+                + (self.engine_node.capacity() * 4) as u64,
         )
     }
 
