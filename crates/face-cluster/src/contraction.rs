@@ -26,6 +26,9 @@
 //! skipped when popped (lazy deletion): a region's statistics never change, a merge makes a new region id.
 //! Each merge costs O(d log n) for a new region of d neighbours: O(k log k) on meshes of bounded valence.
 
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
 use glam::DVec3;
 use radlab_scene::{EdgeAdjacency, Scene};
 use rayon::prelude::*;
@@ -129,72 +132,7 @@ fn key(cost: f64) -> i64 {
 }
 
 /// A queued merge: (key, smaller region, larger region, shared length's bits).
-type Entry = (i64, u32, u32, u64);
-
-/// A min-queue of merge entries: a 4-ary heap (half the depth of a binary heap and its four children in one
-/// cache line or two, which matters for the millions of entries of a large mesh; measured 26% of a 10⁶-face
-/// build in `BinaryHeap::pop`). The entries are distinct, so the pop order is the total order of the tuples,
-/// the same as any other priority queue's.
-struct MinQueue {
-    v: Vec<Entry>,
-}
-
-impl MinQueue {
-    fn from_vec(v: Vec<Entry>) -> Self {
-        let mut q = Self { v };
-        let n = q.v.len();
-        if n > 1 {
-            for i in (0..=(n - 2) / 4).rev() {
-                q.sift_down(i);
-            }
-        }
-        q
-    }
-
-    fn push(&mut self, e: Entry) {
-        let mut i = self.v.len();
-        self.v.push(e);
-        while i > 0 {
-            let p = (i - 1) / 4;
-            if self.v[p] <= self.v[i] {
-                break;
-            }
-            self.v.swap(p, i);
-            i = p;
-        }
-    }
-
-    fn pop(&mut self) -> Option<Entry> {
-        let last = self.v.pop()?;
-        if self.v.is_empty() {
-            return Some(last);
-        }
-        let top = std::mem::replace(&mut self.v[0], last);
-        self.sift_down(0);
-        Some(top)
-    }
-
-    fn sift_down(&mut self, mut i: usize) {
-        let n = self.v.len();
-        loop {
-            let first = 4 * i + 1;
-            if first >= n {
-                return;
-            }
-            let mut m = first;
-            for c in first + 1..(first + 4).min(n) {
-                if self.v[c] < self.v[m] {
-                    m = c;
-                }
-            }
-            if self.v[i] <= self.v[m] {
-                return;
-            }
-            self.v.swap(i, m);
-            i = m;
-        }
-    }
-}
+type Entry = Reverse<(i64, u32, u32, u64)>;
 
 /// Counts from one contraction.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -303,12 +241,12 @@ pub(crate) fn contract(scene: &Scene, params: &FaceClusterParams) -> Contraction
                 .filter(move |&&(b, _)| (b as usize) > a)
                 .map(move |&(b, len)| {
                     let c = cost(&regions[a], &regions[b as usize], len);
-                    (key(c), a as u32, b, len.to_bits())
+                    Reverse((key(c), a as u32, b, len.to_bits()))
                 })
         })
         .collect();
     stats.queue_pushes = initial.len();
-    let mut heap = MinQueue::from_vec(initial);
+    let mut heap: BinaryHeap<Entry> = BinaryHeap::from(initial);
 
     let mut rep: Vec<u32> = (0..k as u32).collect();
     let mut alive = vec![true; k];
@@ -317,7 +255,7 @@ pub(crate) fn contract(scene: &Scene, params: &FaceClusterParams) -> Contraction
     rep.reserve(k);
     alive.reserve(k);
     adj.reserve(k);
-    while let Some((_, a, b, len)) = heap.pop() {
+    while let Some(Reverse((_, a, b, len))) = heap.pop() {
         let (ua, ub) = (a as usize, b as usize);
         if !(alive[ua] && alive[ub]) {
             stats.stale_pops += 1;
@@ -342,7 +280,7 @@ pub(crate) fn contract(scene: &Scene, params: &FaceClusterParams) -> Contraction
         let rw = regions[w as usize];
         for &(x, shared) in &list {
             let c = cost(&regions[x as usize], &rw, shared);
-            heap.push((key(c), x, w, shared.to_bits()));
+            heap.push(Reverse((key(c), x, w, shared.to_bits())));
             stats.queue_pushes += 1;
         }
         adj.push(list);

@@ -303,6 +303,18 @@ fn furnace_sphere_rows_sum_to_one() {
     assert!(worst <= 1e-12, "a row sums to 1 ± {worst:.3e}");
 }
 
+/// A solver with Gouraud output at the `f` oracle and `epsilon`, solved.
+fn gouraud_solved<'a>(scene: &'a Scene, accel: &'a Accel, epsilon: &str) -> FaceClusterSolver<'a> {
+    let p = params(&[
+        ("oracle", "f"),
+        ("epsilon", epsilon),
+        ("reconstruction", "gouraud"),
+    ]);
+    let mut s = FaceClusterSolver::new(scene, accel, p, 7).expect("solver");
+    solve(&mut s);
+    s
+}
+
 /// Gouraud output under a distant light: the whole floor is one flat cluster with one link, so its irradiance
 /// vector e is one constant and B_v = ρ n·e at every vertex is the single link's closed form
 /// B = ρ E_l A_l / (π h²); interpolated anywhere on the floor it stays that value, to rounding.
@@ -311,13 +323,7 @@ fn gouraud_is_exact_where_the_irradiance_vector_is_constant() {
     let want = 0.5 * 10.0 * 0.04 / (std::f64::consts::PI * 25.0);
     let scene = floor_and_light(10, 1.0);
     let accel = Accel::new(&scene);
-    let p = params(&[
-        ("oracle", "f"),
-        ("epsilon", "0.05"),
-        ("reconstruction", "gouraud"),
-    ]);
-    let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
-    solve(&mut s);
+    let s = gouraud_solved(&scene, &accel, "0.05");
     assert_eq!(
         s.engine().link_count(),
         2,
@@ -339,13 +345,7 @@ fn gouraud_is_exact_where_the_irradiance_vector_is_constant() {
 fn gouraud_agrees_at_shared_vertices() {
     let scene = floor_under_a_near_light(8);
     let accel = Accel::new(&scene);
-    let p = params(&[
-        ("oracle", "f"),
-        ("epsilon", "0.02"),
-        ("reconstruction", "gouraud"),
-    ]);
-    let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
-    solve(&mut s);
+    let s = gouraud_solved(&scene, &accel, "0.02");
     let floor = scene.face_count() - 1;
     let mut around: Vec<Vec<usize>> = vec![Vec::new(); scene.vertices.len()];
     for f in 0..floor {

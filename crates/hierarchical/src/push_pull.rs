@@ -129,9 +129,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         if self.dirty.iter().any(|&d| d) {
             return None;
         }
-        let (mut u, mut ux): (Vec<Rgb>, Vec<T::Exitance>) = (0..self.nodes.len())
+        let (u, ux) = self.uniform_field(|_| true);
+        let ((mu, _), _) = self.apply(&u, &ux, false);
+        Some((u, mu))
+    }
+
+    /// The leaves' responses to a unit irradiance from all around (zero at leaves `keep` rejects), pulled.
+    fn uniform_field(&self, keep: impl Fn(usize) -> bool) -> Field<T::Exitance> {
+        let (mut u, mut ux): Field<T::Exitance> = (0..self.nodes.len())
             .map(|i| {
-                if self.children[i].1 == 0 {
+                if self.children[i].1 == 0 && keep(i) {
                     self.kernel.uniform_response(&self.nodes[i])
                 } else {
                     (Rgb::ZERO, T::Exitance::default())
@@ -139,8 +146,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             })
             .unzip();
         self.pull(&mut u, &mut ux);
-        let ((mu, _), _) = self.apply(&u, &ux, false);
-        Some((u, mu))
+        (u, ux)
     }
 
     /// Area-weighted sum over leaves of a per-node vector (per channel), in node order.
@@ -167,16 +173,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .count();
         if self.coarse_mu.is_none() || self.coarse_support != support {
             // The furnace mode: every lit leaf's response to a unit irradiance from all around.
-            let (mut u, mut ux): (Vec<Rgb>, Vec<T::Exitance>) = (0..self.nodes.len())
-                .map(|i| {
-                    if self.children[i].1 == 0 && self.radiosity[i].max_element() > 0.0 {
-                        self.kernel.uniform_response(&self.nodes[i])
-                    } else {
-                        (Rgb::ZERO, T::Exitance::default())
-                    }
-                })
-                .unzip();
-            self.pull(&mut u, &mut ux);
+            let (u, ux) = self.uniform_field(|i| self.radiosity[i].max_element() > 0.0);
             let ((mu, mux), _) = self.apply(&u, &ux, false);
             let denom = self.leaf_sum(&u) - self.leaf_sum(&mu);
             self.coarse_mu = Some((mu, mux));
