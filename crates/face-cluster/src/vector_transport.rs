@@ -164,6 +164,12 @@ impl VectorTransport<'_> {
         if poly.vertices().iter().any(|v| n.dot(*v - c) < -tol) {
             return None;
         }
+        // And the whole receiver in front of or in the source's plane: a receiver reaching behind a source
+        // that stands on it (a partition on a floor) would otherwise be judged by its centroid alone.
+        let (sn, s0) = (poly.normal(), poly.vertices()[0]);
+        if recv.hull().iter().any(|p| sn.dot(*p - s0) < -tol) {
+            return None;
+        }
         let f = n.dot(point_polygon_vector(c, &poly));
         if f <= 0.0 {
             return Some(None);

@@ -375,3 +375,53 @@ fn gouraud_agrees_at_shared_vertices() {
         "the field does not vary ({lo} … {hi}): the test would be vacuous"
     );
 }
+
+/// A lamp standing on a floor (a partition: one emitting face at x = 0.5 across the unit floor, facing +x,
+/// its bottom edge on the floor): every floor face in front of it is lit (the floor's centroid lies in the
+/// lamp's plane, so the lamp's irradiance vector there is zero and must not stand for the whole floor), and
+/// every face behind it stays exactly dark (the lamp emits from its front only and nothing else is lit).
+#[test]
+fn a_lamp_standing_on_a_floor_lights_the_floor_in_front_of_it() {
+    let far = floor_and_light(8, 1.0);
+    let mut b = SceneBuilder::new("partition");
+    let floor = b
+        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
+        .expect("valid");
+    let lamp = b
+        .add_material(Material::new("lamp", Rgb::ZERO, Rgb::splat(1.0)).expect("valid"))
+        .expect("valid");
+    for &v in &far.vertices {
+        b.add_vertex(v, "floor").expect("finite");
+    }
+    let floor_faces = far.face_count() - 1;
+    for f in 0..floor_faces {
+        b.add_polygon(far.faces[f].vertex_indices(), floor, "floor")
+            .expect("valid");
+    }
+    b.add_polygon_points(
+        &[
+            dvec3(0.5, 0.0, 0.0),
+            dvec3(0.5, 1.0, 0.0),
+            dvec3(0.5, 1.0, 0.5),
+            dvec3(0.5, 0.0, 0.5),
+        ],
+        lamp,
+        "lamp",
+    )
+    .expect("valid");
+    let scene = b.build().expect("scene");
+    assert!(scene.faces[floor_faces].normal.x > 0.99);
+    let accel = Accel::new(&scene);
+    let mut s =
+        FaceClusterSolver::new(&scene, &accel, params(&[("epsilon", "0.001")]), 7).expect("solver");
+    solve(&mut s);
+    for f in 0..floor_faces {
+        let c = scene.faces[f].centroid;
+        let b = s.radiosity_at(f, c).x;
+        if c.x > 0.5 {
+            assert!(b > 0.0, "face {f} at {c} in front of the lamp is dark");
+        } else {
+            assert_eq!(b, 0.0, "face {f} at {c} behind the lamp is lit");
+        }
+    }
+}
