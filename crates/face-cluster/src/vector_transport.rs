@@ -164,15 +164,14 @@ impl VectorTransport<'_> {
         if poly.vertices().iter().any(|v| n.dot(*v - c) < -tol) {
             return None;
         }
-        // And the whole receiver in front of or in the source's plane: a receiver reaching behind a source
-        // that stands on it (a partition on a floor) would otherwise be judged by its centroid alone.
-        let (sn, s0) = (poly.normal(), poly.vertices()[0]);
-        if recv.hull().iter().any(|p| sn.dot(*p - s0) < -tol) {
-            return None;
-        }
         let f = n.dot(point_polygon_vector(c, &poly));
         if f <= 0.0 {
-            return Some(None);
+            // Nothing reaches the centroid. Nothing reaches the receiver only if all of it lies behind or in
+            // the source's plane; a receiver reaching in front of a source that stands on it (a lamp on a
+            // floor, the centroid in the lamp's plane) takes the general path instead.
+            let (sn, s0) = (poly.normal(), poly.vertices()[0]);
+            let behind = recv.hull().iter().all(|p| sn.dot(*p - s0) <= tol);
+            return if behind { Some(None) } else { None };
         }
         let v = self.visibility(recv, src);
         if v <= 0.0 {
