@@ -54,8 +54,8 @@
 //! 2026-11-30): solve (steps) wall time at K = 10³, 10⁴, 10⁵, 10⁶: 1.11, 1.92, 2.84, 5.74 s (CPU 0.70, 1.29,
 //! 1.85, 2.83 s; fitted log-log slope 0.23 wall, 0.20 CPU), 49k, 61k, 61k, 52k links; terrain 0.19, 0.29,
 //! 1.72, 0.67 s (slope 0.25; its 10⁶ mesh converges with fewer elements than its 10⁵ one). At 10⁶ faces,
-//! end to end with a cold cache: 51–69 s wall over repeated runs, 32–38 s of CPU, peak RSS 2.5 GiB; warm,
-//! 22–26 s wall; the hierarchy build alone 17.5–18.8 s of CPU.
+//! end to end with a cold cache: 38–69 s wall over repeated runs (bumpy sphere and terrain alike), 24–38 s of
+//! CPU, peak RSS 2.5 GiB; warm, 17–26 s wall; the hierarchy build alone 17.5–18.8 s of CPU.
 //!
 //! Where the solve does badly (measured on concentric spheres, a furnace with B = E/(1 − ρ), through the
 //! operator's row sums: [`radlab_hierarchical::Engine::furnace_response`], M u against u at unit radiosity,
