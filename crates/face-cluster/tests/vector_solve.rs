@@ -68,37 +68,38 @@ fn floor_and_light(cells: usize, scale: f64) -> Scene {
 /// The unit floor of [`floor_and_light`] as `cells` × `cells` squares and a 1 × 1 light (E = 10) at height
 /// 0.5 right above it, facing down: a near source.
 fn floor_under_a_near_light(cells: usize) -> Scene {
-    let far = floor_and_light(cells, 1.0);
-    let mut b = SceneBuilder::new("near");
-    let floor = b
-        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
-        .expect("valid");
-    let light = b
-        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(10.0)).expect("valid"))
-        .expect("valid");
-    for &v in &far.vertices {
-        b.add_vertex(v, "floor").expect("finite");
-    }
-    for f in 0..far.face_count() - 1 {
-        let ids: Vec<u32> = far.faces[f]
-            .indices
-            .iter()
-            .copied()
-            .filter(|&i| i != u32::MAX)
-            .collect();
-        b.add_polygon(&ids, floor, "floor").expect("valid");
-    }
-    b.add_polygon_points(
+    floor_and_quad(
+        cells,
         &[
             dvec3(0.0, 0.0, 0.5),
             dvec3(0.0, 1.0, 0.5),
             dvec3(1.0, 1.0, 0.5),
             dvec3(1.0, 0.0, 0.5),
         ],
-        light,
-        "light",
+        10.0,
     )
-    .expect("valid");
+}
+
+/// The unit floor of [`floor_and_light`] as `cells` × `cells` squares and an emitting quad (E = `e`, ρ = 0)
+/// with the given corners (their order sets the side it emits from).
+fn floor_and_quad(cells: usize, corners: &[glam::DVec3; 4], e: f64) -> Scene {
+    let far = floor_and_light(cells, 1.0);
+    let mut b = SceneBuilder::new("floor and quad");
+    let floor = b
+        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
+        .expect("valid");
+    let light = b
+        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(e)).expect("valid"))
+        .expect("valid");
+    for &v in &far.vertices {
+        b.add_vertex(v, "floor").expect("finite");
+    }
+    for f in 0..far.face_count() - 1 {
+        b.add_polygon(far.faces[f].vertex_indices(), floor, "floor")
+            .expect("valid");
+    }
+    b.add_polygon_points(corners, light, "light")
+        .expect("valid");
     b.build().expect("scene")
 }
 
@@ -382,34 +383,17 @@ fn gouraud_agrees_at_shared_vertices() {
 /// every face behind it stays exactly dark (the lamp emits from its front only and nothing else is lit).
 #[test]
 fn a_lamp_standing_on_a_floor_lights_the_floor_in_front_of_it() {
-    let far = floor_and_light(8, 1.0);
-    let mut b = SceneBuilder::new("partition");
-    let floor = b
-        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
-        .expect("valid");
-    let lamp = b
-        .add_material(Material::new("lamp", Rgb::ZERO, Rgb::splat(1.0)).expect("valid"))
-        .expect("valid");
-    for &v in &far.vertices {
-        b.add_vertex(v, "floor").expect("finite");
-    }
-    let floor_faces = far.face_count() - 1;
-    for f in 0..floor_faces {
-        b.add_polygon(far.faces[f].vertex_indices(), floor, "floor")
-            .expect("valid");
-    }
-    b.add_polygon_points(
+    let scene = floor_and_quad(
+        8,
         &[
             dvec3(0.5, 0.0, 0.0),
             dvec3(0.5, 1.0, 0.0),
             dvec3(0.5, 1.0, 0.5),
             dvec3(0.5, 0.0, 0.5),
         ],
-        lamp,
-        "lamp",
-    )
-    .expect("valid");
-    let scene = b.build().expect("scene");
+        1.0,
+    );
+    let floor_faces = scene.face_count() - 1;
     assert!(scene.faces[floor_faces].normal.x > 0.99);
     let accel = Accel::new(&scene);
     let mut s =
