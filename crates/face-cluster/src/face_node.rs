@@ -299,6 +299,17 @@ impl FaceNode<'_> {
         na.dot(cb - ca) > tol && nb.dot(ca - cb) > tol
     }
 
+    /// Whether the node is a cluster whose children are all single faces (tree leaves).
+    pub fn children_are_faces(&self) -> bool {
+        match self {
+            Self::Cluster(c) => {
+                let node = c.node();
+                !node.is_leaf() && node.children().all(|k| c.ctx.tree.node(k).is_leaf())
+            }
+            Self::Volume(_) | Self::Patch(_) => false,
+        }
+    }
+
     /// The patch, if it is one.
     pub fn as_patch(&self) -> Option<&Patch> {
         match self {

@@ -6,21 +6,34 @@
 //! by [`VectorTransport`]. Radiosity at a point of a face comes from the deepest engine node holding the face:
 //! its patch if the refinement reached the face, else B = E + ρ max(0, n·e) with the irradiance vector e
 //! pushed to the deepest face cluster containing it (section 4's final propagation, per queried face).
+//! With `reconstruction = "gouraud"`, from irradiance vectors at the mesh's vertices instead: e_v the
+//! area-weighted mean of the irradiance vectors of the faces around vertex v (each face's from the deepest
+//! node holding it), n_v the area-weighted mean of their normals, B_v = E + ρ max(0, n_v·e_v) interpolated
+//! over each face (bilinear over a quad, linear over a triangle), so the output is continuous across every
+//! shared edge between faces of one material. A face the refinement split into patches keeps the patch
+//! solution's own Gouraud values (its quadtree's corners), finer than its vertices but not matched to its
+//! neighbours'. The vertex fields are linear in k and computed at the first query after a step.
 
-use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
-use radlab_hierarchical::{Engine, ErrorNorm, HierarchicalParams, PatchKernel, SurfaceOutput};
+use radlab_hierarchical::{
+    Engine, ErrorNorm, HierarchicalParams, NodeKind, PatchKernel, SurfaceOutput,
+};
+use radlab_scene::gouraud::interpolate_corners;
 use radlab_scene::{
     Accel, FaceId, MethodParams, Reconstruction, Rgb, Scene, Solution, SolveError, Solver, Stats,
     Step,
 };
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::face_node::{FaceContext, FaceNode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
+
+/// Marks a tree node with no engine node.
+const NO_NODE: u32 = u32::MAX;
 
 /// Default ε of the face-cluster method (with the power error norm, as volume clusters).
 pub const DEFAULT_EPSILON: f64 = 1e-4;
@@ -127,8 +140,14 @@ pub struct FaceClusterSolver<'a> {
     ctx: Arc<FaceContext<'a>>,
     engine: Engine<FaceNode<'a>, VectorTransport<'a>>,
     output: SurfaceOutput,
-    /// Engine node of each tree node materialised so far.
-    engine_node: HashMap<u32, u32>,
+    /// Engine node of each tree node, [`NO_NODE`] where not materialised (indexed by tree node: an array
+    /// rather than a hash map, since output asks for it from every face).
+    engine_node: Vec<u32>,
+    /// Whether point answers are interpolated from vertices (`reconstruction = "gouraud"`).
+    gouraud: bool,
+    /// Per scene vertex, the unit vertex normal and irradiance vector per channel (Gouraud output), computed
+    /// at the first query after a step.
+    vertex_fields: OnceLock<Vec<VertexField>>,
     scanned: usize,
     rays: u64,
 }
@@ -176,6 +195,7 @@ impl<'a> FaceClusterSolver<'a> {
         let min_size = p.resolve_min_size(scene)?;
         let roots = tree.roots();
         let scene_area: f64 = roots.clone().map(|r| tree.node(r).area).sum();
+        let tree_nodes = tree.nodes().len();
         let ctx = Arc::new(FaceContext::new(tree, scene));
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
         let transport = VectorTransport::new(
@@ -190,6 +210,7 @@ impl<'a> FaceClusterSolver<'a> {
             },
         );
         let output = SurfaceOutput::new(p.reconstruction, seed);
+        let gouraud = p.reconstruction == Reconstruction::Gouraud;
         let root = ctx.root_volume();
         let mut engine = Engine::new(vec![root], transport, p, min_size)?;
         engine.skip_initial_links();
@@ -203,7 +224,9 @@ impl<'a> FaceClusterSolver<'a> {
             ctx,
             engine,
             output,
-            engine_node: HashMap::new(),
+            engine_node: vec![NO_NODE; tree_nodes],
+            gouraud,
+            vertex_fields: OnceLock::new(),
             scanned: 0,
             rays,
         };
@@ -216,7 +239,7 @@ impl<'a> FaceClusterSolver<'a> {
         let nodes = self.engine.nodes();
         for (i, n) in nodes.iter().enumerate().skip(self.scanned) {
             if let FaceNode::Cluster(c) = n {
-                self.engine_node.insert(c.id, i as u32);
+                self.engine_node[c.id as usize] = i as u32;
             }
         }
         self.scanned = nodes.len();
@@ -243,7 +266,8 @@ impl<'a> FaceClusterSolver<'a> {
         let tree = &self.ctx.tree;
         let mut n = tree.leaf_of_face(face);
         loop {
-            if let Some(&i) = self.engine_node.get(&(n as u32)) {
+            let i = self.engine_node[n];
+            if i != NO_NODE {
                 return Some(i);
             }
             n = tree.node(n).parent()?;
@@ -266,7 +290,7 @@ impl<'a> FaceClusterSolver<'a> {
             self.rays,
             self.output.bytes()
                 + self.ctx.bytes() as u64
-                + (self.engine_node.capacity() * 16) as u64,
+                + (self.engine_node.capacity() * 4) as u64,
         )
     }
 
@@ -274,14 +298,109 @@ impl<'a> FaceClusterSolver<'a> {
         let s = self.engine.step_counting_rays(self.accel, &mut self.rays)?;
         self.index_new_nodes();
         self.output.update(&self.engine, self.scene.face_count());
+        self.vertex_fields = OnceLock::new();
         Ok(s)
     }
+
+    /// The irradiance vector of input face `face`: at the deepest engine node holding it (the area mean over
+    /// its leaves where the refinement split the face into patches).
+    fn face_irradiance(&self, face: FaceId) -> [DVec3; 3] {
+        let h = self.engine.irradiance();
+        if let Some(root) = self.engine.face_node(face) {
+            let (mut sum, mut area) = ([DVec3::ZERO; 3], 0.0);
+            let mut stack = vec![root];
+            while let Some(i) = stack.pop() {
+                if self.engine.is_leaf(i) {
+                    let a = self.engine.nodes()[i as usize].area();
+                    for k in 0..3 {
+                        sum[k] += h[i as usize][k] * a;
+                    }
+                    area += a;
+                } else {
+                    stack.extend(self.engine.children(i));
+                }
+            }
+            return if area > 0.0 {
+                sum.map(|v| v / area)
+            } else {
+                h[root as usize]
+            };
+        }
+        self.deepest_cluster(face)
+            .map_or([DVec3::ZERO; 3], |i| h[i as usize])
+    }
+
+    /// Per scene vertex: the area-weighted mean of its faces' unit normals (normalised) and of their
+    /// irradiance vectors. Linear in k: for output only.
+    fn vertex_fields(&self) -> &[VertexField] {
+        self.vertex_fields.get_or_init(|| {
+            let faces: Vec<[DVec3; 3]> = (0..self.scene.face_count())
+                .into_par_iter()
+                .map(|f| self.face_irradiance(f))
+                .collect();
+            let mut sums = vec![(DVec3::ZERO, [DVec3::ZERO; 3], 0.0); self.scene.vertices.len()];
+            for (f, e) in faces.iter().enumerate() {
+                let face = &self.scene.faces[f];
+                for &v in face.vertex_indices() {
+                    let s = &mut sums[v as usize];
+                    s.0 += face.normal * face.area;
+                    for (sum, e) in s.1.iter_mut().zip(e) {
+                        *sum += *e * face.area;
+                    }
+                    s.2 += face.area;
+                }
+            }
+            sums.into_iter()
+                .map(|(n, e, a)| VertexField {
+                    normal: n.normalize_or_zero(),
+                    irradiance: if a > 0.0 { e.map(|v| v / a) } else { e },
+                })
+                .collect()
+        })
+    }
+
+    /// Gouraud radiosity of `face` at `point`: B_v = E + ρ max(0, n_v·e_v) at the face's vertices, interpolated
+    /// (bilinear in a quad's parameters, linear in a triangle's).
+    fn gouraud_at(&self, face: FaceId, point: DVec3) -> Rgb {
+        let fields = self.vertex_fields();
+        let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
+        let mut values = [Rgb::ZERO; 4];
+        for (slot, &v) in values
+            .iter_mut()
+            .zip(self.scene.faces[face].vertex_indices())
+        {
+            let VertexField { normal, irradiance } = &fields[v as usize];
+            *slot = Rgb::new(
+                em[0] + rho[0] * normal.dot(irradiance[0]).max(0.0),
+                em[1] + rho[1] * normal.dot(irradiance[1]).max(0.0),
+                em[2] + rho[2] * normal.dot(irradiance[2]).max(0.0),
+            );
+        }
+        interpolate_corners(&self.scene.polygon(face), &values, point)
+    }
+}
+
+/// What Gouraud output keeps per scene vertex.
+#[derive(Clone, Copy, Debug)]
+struct VertexField {
+    /// Area-weighted mean of the unit normals of the faces around the vertex, normalised.
+    normal: DVec3,
+    /// Area-weighted mean of those faces' irradiance vectors, per channel.
+    irradiance: [DVec3; 3],
 }
 
 impl Solution for FaceClusterSolver<'_> {
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         if face >= self.scene.face_count() {
             return Rgb::ZERO;
+        }
+        if self.gouraud
+            && self
+                .engine
+                .face_node(face)
+                .is_none_or(|i| self.engine.is_leaf(i))
+        {
+            return self.gouraud_at(face, point);
         }
         if self.engine.face_node(face).is_some() {
             return self

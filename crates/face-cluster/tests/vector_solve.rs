@@ -68,37 +68,38 @@ fn floor_and_light(cells: usize, scale: f64) -> Scene {
 /// The unit floor of [`floor_and_light`] as `cells` × `cells` squares and a 1 × 1 light (E = 10) at height
 /// 0.5 right above it, facing down: a near source.
 fn floor_under_a_near_light(cells: usize) -> Scene {
-    let far = floor_and_light(cells, 1.0);
-    let mut b = SceneBuilder::new("near");
-    let floor = b
-        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
-        .expect("valid");
-    let light = b
-        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(10.0)).expect("valid"))
-        .expect("valid");
-    for &v in &far.vertices {
-        b.add_vertex(v, "floor").expect("finite");
-    }
-    for f in 0..far.face_count() - 1 {
-        let ids: Vec<u32> = far.faces[f]
-            .indices
-            .iter()
-            .copied()
-            .filter(|&i| i != u32::MAX)
-            .collect();
-        b.add_polygon(&ids, floor, "floor").expect("valid");
-    }
-    b.add_polygon_points(
+    floor_and_quad(
+        cells,
         &[
             dvec3(0.0, 0.0, 0.5),
             dvec3(0.0, 1.0, 0.5),
             dvec3(1.0, 1.0, 0.5),
             dvec3(1.0, 0.0, 0.5),
         ],
-        light,
-        "light",
+        10.0,
     )
-    .expect("valid");
+}
+
+/// The unit floor of [`floor_and_light`] as `cells` × `cells` squares and an emitting quad (E = `e`, ρ = 0)
+/// with the given corners (their order sets the side it emits from).
+fn floor_and_quad(cells: usize, corners: &[glam::DVec3; 4], e: f64) -> Scene {
+    let far = floor_and_light(cells, 1.0);
+    let mut b = SceneBuilder::new("floor and quad");
+    let floor = b
+        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
+        .expect("valid");
+    let light = b
+        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(e)).expect("valid"))
+        .expect("valid");
+    for &v in &far.vertices {
+        b.add_vertex(v, "floor").expect("finite");
+    }
+    for f in 0..far.face_count() - 1 {
+        b.add_polygon(far.faces[f].vertex_indices(), floor, "floor")
+            .expect("valid");
+    }
+    b.add_polygon_points(corners, light, "light")
+        .expect("valid");
     b.build().expect("scene")
 }
 
@@ -276,4 +277,135 @@ fn refinement_stays_above_the_faces() {
             .iter()
             .all(|n| !matches!(n, FaceNode::Patch(_)))
     );
+}
+
+/// A furnace sphere of 48 faces at ρ = 0.999 (closed, so at unit radiosity every point's form factors sum to
+/// one): after the solve every leaf's row of the gathered operator sums to one, (M u)/u = ρ with u the unit
+/// response. The refinement reaches the faces here, and a face's row then sums exact point-to-polygon factors
+/// at its Gauss points (patch links, and near single-face links evaluated per leaf), so only rounding is left:
+/// a few ulps per term over fewer than 10³ terms. Near links evaluated once at the receiver's centroid summed
+/// to 1.014 at some leaves, and the iteration diverged.
+#[test]
+fn furnace_sphere_rows_sum_to_one() {
+    let rho = 0.999;
+    let scene =
+        builtin(&format!("furnace-sphere?reflectance={rho}&tessellation=2")).expect("scene");
+    let accel = Accel::new(&scene);
+    let mut s = FaceClusterSolver::new(&scene, &accel, params(&[]), 1).expect("solver");
+    solve(&mut s);
+    let e = s.engine();
+    let (u, mu) = e.furnace_response().expect("rows built by the last pass");
+    let mut worst: f64 = 0.0;
+    for i in (0..e.nodes().len() as u32).filter(|&i| e.is_leaf(i)) {
+        let (u, mu) = (u[i as usize].x, mu[i as usize].x);
+        assert!(u > 0.0, "leaf {i} has no unit response");
+        worst = worst.max((mu / (rho * u) - 1.0).abs());
+    }
+    assert!(worst <= 1e-12, "a row sums to 1 ± {worst:.3e}");
+}
+
+/// A solver with Gouraud output at the `f` oracle and `epsilon`, solved.
+fn gouraud_solved<'a>(scene: &'a Scene, accel: &'a Accel, epsilon: &str) -> FaceClusterSolver<'a> {
+    let p = params(&[
+        ("oracle", "f"),
+        ("epsilon", epsilon),
+        ("reconstruction", "gouraud"),
+    ]);
+    let mut s = FaceClusterSolver::new(scene, accel, p, 7).expect("solver");
+    solve(&mut s);
+    s
+}
+
+/// Gouraud output under a distant light: the whole floor is one flat cluster with one link, so its irradiance
+/// vector e is one constant and B_v = ρ n·e at every vertex is the single link's closed form
+/// B = ρ E_l A_l / (π h²); interpolated anywhere on the floor it stays that value, to rounding.
+#[test]
+fn gouraud_is_exact_where_the_irradiance_vector_is_constant() {
+    let want = 0.5 * 10.0 * 0.04 / (std::f64::consts::PI * 25.0);
+    let scene = floor_and_light(10, 1.0);
+    let accel = Accel::new(&scene);
+    let s = gouraud_solved(&scene, &accel, "0.05");
+    assert_eq!(
+        s.engine().link_count(),
+        2,
+        "light → floor and floor → light"
+    );
+    for f in 0..scene.face_count() - 1 {
+        let poly = scene.polygon(f);
+        for (u, v) in [(0.0, 0.0), (0.3, 0.1), (0.1, 0.7), (1.0, 0.0)] {
+            let b = s.radiosity_at(f, poly.point_at(u, v)).x;
+            assert!((b - want).abs() <= 1e-12 * want, "face {f}: {b} vs {want}");
+        }
+    }
+}
+
+/// Gouraud output is continuous across the floor's shared edges: at every vertex, every face around it
+/// answers the same value (B_v of that vertex), while the values vary over the floor (the floor is split into
+/// clusters with their own irradiance vectors, none refined down to patches).
+#[test]
+fn gouraud_agrees_at_shared_vertices() {
+    let scene = floor_under_a_near_light(8);
+    let accel = Accel::new(&scene);
+    let s = gouraud_solved(&scene, &accel, "0.02");
+    let floor = scene.face_count() - 1;
+    let mut around: Vec<Vec<usize>> = vec![Vec::new(); scene.vertices.len()];
+    for f in 0..floor {
+        for &v in scene.faces[f].vertex_indices() {
+            around[v as usize].push(f);
+        }
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0_f64);
+    for (v, faces) in around.iter().enumerate() {
+        let values: Vec<f64> = faces
+            .iter()
+            .map(|&f| s.radiosity_at(f, scene.vertices[v]).x)
+            .collect();
+        for b in &values {
+            assert!(
+                (b - values[0]).abs() <= 1e-12 * values[0].abs(),
+                "vertex {v}: {values:?}"
+            );
+        }
+        if let Some(&b) = values.first() {
+            lo = lo.min(b);
+            hi = hi.max(b);
+        }
+    }
+    assert!(
+        hi > lo * 1.01,
+        "the field does not vary ({lo} … {hi}): the test would be vacuous"
+    );
+}
+
+/// A lamp standing on a floor (a partition: one emitting face at x = 0.5 across the unit floor, facing +x,
+/// its bottom edge on the floor): every floor face in front of it is lit (the floor's centroid lies in the
+/// lamp's plane, so the lamp's irradiance vector there is zero and must not stand for the whole floor), and
+/// every face behind it stays exactly dark (the lamp emits from its front only and nothing else is lit).
+#[test]
+fn a_lamp_standing_on_a_floor_lights_the_floor_in_front_of_it() {
+    let scene = floor_and_quad(
+        8,
+        &[
+            dvec3(0.5, 0.0, 0.0),
+            dvec3(0.5, 1.0, 0.0),
+            dvec3(0.5, 1.0, 0.5),
+            dvec3(0.5, 0.0, 0.5),
+        ],
+        1.0,
+    );
+    let floor_faces = scene.face_count() - 1;
+    assert!(scene.faces[floor_faces].normal.x > 0.99);
+    let accel = Accel::new(&scene);
+    let mut s =
+        FaceClusterSolver::new(&scene, &accel, params(&[("epsilon", "0.001")]), 7).expect("solver");
+    solve(&mut s);
+    for f in 0..floor_faces {
+        let c = scene.faces[f].centroid;
+        let b = s.radiosity_at(f, c).x;
+        if c.x > 0.5 {
+            assert!(b > 0.0, "face {f} at {c} in front of the lamp is dark");
+        } else {
+            assert_eq!(b, 0.0, "face {f} at {c} behind the lamp is lit");
+        }
+    }
 }

@@ -120,6 +120,35 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
     }
 
+    /// The operator's response to the furnace state, for diagnostics and tests: `u`, every leaf's response to
+    /// a unit irradiance from all around (the transport's uniform response: B = ρ for a patch), pulled; and
+    /// `M u`, one gather/push-pull pass of it without emission. Per leaf, (M u)/u is the row sum of the
+    /// gathered kernel at unit radiosity: at most one in a closed scene, one where the transfer is exact.
+    /// `None` while links changed since the last solution pass (the gather rows are built by that pass).
+    pub fn furnace_response(&self) -> Option<(Vec<Rgb>, Vec<Rgb>)> {
+        if self.dirty.iter().any(|&d| d) {
+            return None;
+        }
+        let (u, ux) = self.uniform_field(|_| true);
+        let ((mu, _), _) = self.apply(&u, &ux, false);
+        Some((u, mu))
+    }
+
+    /// The leaves' responses to a unit irradiance from all around (zero at leaves `keep` rejects), pulled.
+    fn uniform_field(&self, keep: impl Fn(usize) -> bool) -> Field<T::Exitance> {
+        let (mut u, mut ux): Field<T::Exitance> = (0..self.nodes.len())
+            .map(|i| {
+                if self.children[i].1 == 0 && keep(i) {
+                    self.kernel.uniform_response(&self.nodes[i])
+                } else {
+                    (Rgb::ZERO, T::Exitance::default())
+                }
+            })
+            .unzip();
+        self.pull(&mut u, &mut ux);
+        (u, ux)
+    }
+
     /// Area-weighted sum over leaves of a per-node vector (per channel), in node order.
     fn leaf_sum(&self, v: &[Rgb]) -> Rgb {
         let mut s = Rgb::ZERO;
@@ -144,16 +173,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .count();
         if self.coarse_mu.is_none() || self.coarse_support != support {
             // The furnace mode: every lit leaf's response to a unit irradiance from all around.
-            let (mut u, mut ux): (Vec<Rgb>, Vec<T::Exitance>) = (0..self.nodes.len())
-                .map(|i| {
-                    if self.children[i].1 == 0 && self.radiosity[i].max_element() > 0.0 {
-                        self.kernel.uniform_response(&self.nodes[i])
-                    } else {
-                        (Rgb::ZERO, T::Exitance::default())
-                    }
-                })
-                .unzip();
-            self.pull(&mut u, &mut ux);
+            let (u, ux) = self.uniform_field(|i| self.radiosity[i].max_element() > 0.0);
             let ((mu, mux), _) = self.apply(&u, &ux, false);
             let denom = self.leaf_sum(&u) - self.leaf_sum(&mu);
             self.coarse_mu = Some((mu, mux));

@@ -84,22 +84,26 @@ impl GouraudField {
     /// The interpolated radiosity at `point` inside element `e` (bilinear over a quad, linear over a
     /// triangle; a point slightly outside is clamped to the element).
     pub fn at(&self, e: usize, point: DVec3) -> Rgb {
-        let (s, t) = parameters(&self.polygons[e], point);
-        let c = &self.corners[e];
-        if self.polygons[e].is_triangle() {
-            // point_at's triangle map is a + s(b − a) + t(c − a) on the fold s + t ≤ 1.
-            (1.0 - s - t) * c[0] + s * c[1] + t * c[2]
-        } else {
-            (1.0 - s) * (1.0 - t) * c[0]
-                + s * (1.0 - t) * c[1]
-                + s * t * c[2]
-                + (1.0 - s) * t * c[3]
-        }
+        interpolate_corners(&self.polygons[e], &self.corners[e], point)
     }
 
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.corners.len() * (size_of::<[Rgb; 4]>() + size_of::<Polygon>())
+    }
+}
+
+/// The value at `point` of the field taking `corners[k]` at vertex k of `poly` (its first three for a
+/// triangle): bilinear over a quad, linear over a triangle; a point slightly outside is clamped to the
+/// polygon.
+pub fn interpolate_corners(poly: &Polygon, corners: &[Rgb; 4], point: DVec3) -> Rgb {
+    let (s, t) = parameters(poly, point);
+    let c = corners;
+    if poly.is_triangle() {
+        // point_at's triangle map is a + s(b − a) + t(c − a) on the fold s + t ≤ 1.
+        (1.0 - s - t) * c[0] + s * c[1] + t * c[2]
+    } else {
+        (1.0 - s) * (1.0 - t) * c[0] + s * (1.0 - t) * c[1] + s * t * c[2] + (1.0 - s) * t * c[3]
     }
 }
 
