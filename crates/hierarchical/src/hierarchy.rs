@@ -52,6 +52,12 @@ where
     pub(crate) rows: Vec<Vec<RowEntry<T::Coefficient>>>,
     /// Nodes whose links changed since the rows were last built (and new nodes).
     pub(crate) dirty: Vec<bool>,
+    /// Per receiver, per link (aligned with `links`): the leaves below the link's source and their
+    /// normalised weights in what it sends (A_y F_{y→r}, [`Transport::sends_source_radiosity`]); empty when
+    /// the source is a leaf or the link sends something else (its transport's emit).
+    pub(crate) source_rows: Vec<Vec<Vec<(u32, f64)>>>,
+    /// Nodes split since the source rows were last built.
+    pub(crate) split_since: Vec<bool>,
     pub(crate) roots: Vec<u32>,
     /// Per root: whether its initial links as a source exist yet (lazy linking).
     pub(crate) linked: Vec<bool>,
@@ -105,6 +111,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             irradiance: Vec::with_capacity(n),
             rows: Vec::with_capacity(n),
             dirty: Vec::with_capacity(n),
+            source_rows: Vec::with_capacity(n),
+            split_since: Vec::with_capacity(n),
             roots: (0..n as u32).collect(),
             linked: vec![false; n],
             face_nodes: Vec::new(),
@@ -150,6 +158,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.links.push(Vec::new());
         self.rows.push(Vec::new());
         self.dirty.push(true);
+        self.source_rows.push(Vec::new());
+        self.split_since.push(false);
         self.radiosity.push(b);
         self.exitance.push(x);
         self.irradiance.push(h);
@@ -277,13 +287,25 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + size_of::<(u32, u32)>()
             + size_of::<Vec<Link>>()
             + size_of::<Vec<RowEntry<T::Coefficient>>>()
-            + 1
+            + size_of::<Vec<Vec<(u32, f64)>>>()
+            + 2
             + 2 * size_of::<Rgb>()
             + size_of::<T::Exitance>()
             + size_of::<T::Irradiance>();
         let links: usize = self.links.iter().map(|l| l.capacity()).sum();
         let rows: usize = self.rows.iter().map(|r| r.capacity()).sum();
+        let (source_links, source_entries) =
+            self.source_rows
+                .iter()
+                .fold((0, 0), |(n, e), ls: &Vec<Vec<(u32, f64)>>| {
+                    (
+                        n + ls.capacity(),
+                        e + ls.iter().map(|w| w.capacity()).sum::<usize>(),
+                    )
+                });
         (self.nodes.len() * per_node
+            + source_links * size_of::<Vec<(u32, f64)>>()
+            + source_entries * size_of::<(u32, f64)>()
             + self.face_nodes.capacity() * 4
             + links * size_of::<Link>()
             + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
@@ -336,6 +358,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
         self.children[i as usize] = (first, self.nodes.len() as u32 - first);
         self.dirty[i as usize] = true;
+        self.split_since[i as usize] = true;
     }
 
     /// Splits every node for which `split` holds, top down, before any link exists: a method whose
