@@ -30,7 +30,7 @@
 
 use rayon::prelude::*;
 
-use crate::hierarchy::{Engine, NONE, RowEntry};
+use crate::hierarchy::{Engine, NONE, RowEntry, SourceWeight};
 use crate::link::{Link, kernel_mean};
 use crate::node::NodeKind;
 use crate::transport::{GatherAt, Transport};
@@ -115,7 +115,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The leaves below the source of `recv`'s link `l` with their normalised weights in what the link
     /// sends, w_y = A_y F_{y→r} / Σ, and the number of kernel evaluations; empty when the source is a leaf,
     /// the link sends something else, an end is not a patch, or no leaf sees the receiver.
-    fn source_row(&self, recv: u32, l: &Link) -> (Vec<(u32, f64)>, u64) {
+    fn source_row(&self, recv: u32, l: &Link) -> (Vec<SourceWeight>, u64) {
         let s = l.source;
         if l.overlap || self.children[s as usize].1 == 0 || !self.kernel.sends_source_radiosity(l) {
             return (Vec::new(), 0);
@@ -146,9 +146,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         if !(total > 0.0 && total.is_finite()) {
             return (Vec::new(), evaluations);
         }
-        out.iter_mut().for_each(|(_, w)| *w /= total);
-        out.shrink_to_fit();
-        (out, evaluations)
+        let row = out.into_iter().map(|(j, w)| (j, w / total)).collect();
+        (row, evaluations)
     }
 
     /// Rebuilds the source rows of receivers whose links changed, and of links whose source's subtree
@@ -170,7 +169,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                         .any(|l| grown[l.source as usize])
             })
             .collect();
-        let built: Vec<(Vec<Vec<(u32, f64)>>, u64)> = todo
+        let built: Vec<(Vec<Vec<SourceWeight>>, u64)> = todo
             .par_iter()
             .map(|&r| {
                 let old = &self.source_rows[r as usize];

@@ -15,6 +15,10 @@ use crate::transport::{NodeView, Transport};
 /// One cached gather entry of a target: the link (receiver node, index in its links) and its coefficient.
 pub(crate) type RowEntry<C> = (u32, u32, C);
 
+/// One leaf below a link's source and its normalised weight in what the link sends (double precision: in
+/// single precision the weights' sum misses one by 1e-7, which a furnace near ρ = 1 magnifies by 1/(1 − ρ)).
+pub(crate) type SourceWeight = (u32, f64);
+
 /// Marks "no node".
 pub const NONE: u32 = u32::MAX;
 
@@ -55,7 +59,7 @@ where
     /// Per receiver, per link (aligned with `links`): the leaves below the link's source and their
     /// normalised weights in what it sends (A_y F_{y→r}, [`Transport::sends_source_radiosity`]); empty when
     /// the source is a leaf or the link sends something else (its transport's emit).
-    pub(crate) source_rows: Vec<Vec<Vec<(u32, f64)>>>,
+    pub(crate) source_rows: Vec<Vec<Vec<SourceWeight>>>,
     /// Nodes split since the source rows were last built.
     pub(crate) split_since: Vec<bool>,
     pub(crate) roots: Vec<u32>,
@@ -287,7 +291,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + size_of::<(u32, u32)>()
             + size_of::<Vec<Link>>()
             + size_of::<Vec<RowEntry<T::Coefficient>>>()
-            + size_of::<Vec<Vec<(u32, f64)>>>()
+            + size_of::<Vec<Vec<SourceWeight>>>()
             + 2
             + 2 * size_of::<Rgb>()
             + size_of::<T::Exitance>()
@@ -297,15 +301,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let (source_links, source_entries) =
             self.source_rows
                 .iter()
-                .fold((0, 0), |(n, e), ls: &Vec<Vec<(u32, f64)>>| {
+                .fold((0, 0), |(n, e), ls: &Vec<Vec<SourceWeight>>| {
                     (
                         n + ls.capacity(),
                         e + ls.iter().map(|w| w.capacity()).sum::<usize>(),
                     )
                 });
         (self.nodes.len() * per_node
-            + source_links * size_of::<Vec<(u32, f64)>>()
-            + source_entries * size_of::<(u32, f64)>()
+            + source_links * size_of::<Vec<SourceWeight>>()
+            + source_entries * size_of::<SourceWeight>()
             + self.face_nodes.capacity() * 4
             + links * size_of::<Link>()
             + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
