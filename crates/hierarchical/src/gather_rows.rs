@@ -10,13 +10,28 @@
 //!   full form factor at every Gauss point (one in a closed, unoccluded scene): the row sums are exact and the
 //!   furnace B = E/(1 − ρ) holds at any ρ.
 //!
-//! Every evaluation below the receiver is a kernel evaluation and is counted in the engine's form factors, so a
-//! gather that re-evaluates links pays for it in the statistics. Rows are rebuilt only for targets below a
-//! node whose links changed, and only the entries of the changed nodes' links are evaluated again.
+//! The source side mirrors the leaf gather: a link r ← s whose source is an inner node (of patches, toward a
+//! patch, and sending radiosity: [`Transport::sends_source_radiosity`]) sends Σ_y w_y B_y / Σ_y w_y over the
+//! leaves y below s, w_y = A_y F_{y→r} by y's own Gauss points, so each source leaf's power is divided among
+//! the receivers by how much of it each sees: Σ_t A_t F_{t→s} · A_y F_{y→r} / (A_s F_{s→r}) = A_y F_{y→r} up
+//! to quadrature, since both sides integrate the same A_r F_rs = A_s F_sr. Rows and columns of the discrete
+//! operator are then exact together, and energy is conserved whatever mix of levels the refinement chose.
+//! (The area mean, HSA91's pull, gives every leaf of s the same share of a coarse link. When near receivers
+//! see a face through its small elements and far ones through its whole area, a leaf in the face's corner,
+//! whose view the adjacent faces fill, sends its own share to those and still the face's mean share to
+//! everything farther: more than its whole hemisphere, while the face's centre sends less than its own. Dark
+//! corners over-send, bright centres under-send, and energy is lost.)
+//!
+//! Every evaluation below the receiver or the source is a kernel evaluation and is counted in the engine's
+//! form factors, so a gather that re-evaluates links pays for it in the statistics. Rows are rebuilt only for
+//! targets below a node whose links changed, and only the entries of the changed nodes' links are evaluated
+//! again; a link's source weights are evaluated again only when its receiver's links changed or a node below
+//! its source was split.
 
 use rayon::prelude::*;
 
-use crate::hierarchy::{Engine, NONE, RowEntry};
+use crate::hierarchy::{Engine, NONE, RowEntry, SourceWeight};
+use crate::link::{Link, kernel_mean};
 use crate::node::NodeKind;
 use crate::transport::{GatherAt, Transport};
 
@@ -97,8 +112,95 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         (row, evaluations)
     }
 
+    /// The leaves below the source of `recv`'s link `l` with their normalised weights in what the link
+    /// sends, w_y = A_y F_{y→r} / Σ, and the number of kernel evaluations; empty when the source is a leaf,
+    /// the link sends something else, an end is not a patch, or no leaf sees the receiver.
+    fn source_row(&self, recv: u32, l: &Link) -> (Vec<SourceWeight>, u64) {
+        let s = l.source;
+        if l.overlap || self.children[s as usize].1 == 0 || !self.kernel.sends_source_radiosity(l) {
+            return (Vec::new(), 0);
+        }
+        let Some(r) = self.nodes[recv as usize].patch() else {
+            return (Vec::new(), 0);
+        };
+        let m = self.params.quadrature;
+        let mut out = Vec::new();
+        let mut stack = vec![s];
+        let (mut total, mut evaluations) = (0.0, 0);
+        while let Some(j) = stack.pop() {
+            let (first, count) = self.children[j as usize];
+            if count > 0 {
+                stack.extend((first..first + count).rev());
+                continue;
+            }
+            let Some(y) = self.nodes[j as usize].patch() else {
+                return (Vec::new(), evaluations);
+            };
+            evaluations += 1;
+            let w = y.area * kernel_mean(y, r, m);
+            if w > 0.0 && w.is_finite() {
+                total += w;
+                out.push((j, w));
+            }
+        }
+        if !(total > 0.0 && total.is_finite()) {
+            return (Vec::new(), evaluations);
+        }
+        let row = out.into_iter().map(|(j, w)| (j, w / total)).collect();
+        (row, evaluations)
+    }
+
+    /// Rebuilds the source rows of receivers whose links changed, and of links whose source's subtree
+    /// was split since the last build; clears the split marks.
+    fn rebuild_source_rows(&mut self) {
+        let n = self.nodes.len();
+        let mut grown = std::mem::take(&mut self.split_since);
+        for i in (0..n).rev() {
+            let p = self.parent[i];
+            if grown[i] && p != NONE {
+                grown[p as usize] = true;
+            }
+        }
+        let todo: Vec<u32> = (0..n as u32)
+            .filter(|&r| {
+                self.dirty[r as usize]
+                    || self.links[r as usize]
+                        .iter()
+                        .any(|l| grown[l.source as usize])
+            })
+            .collect();
+        let built: Vec<(Vec<Vec<SourceWeight>>, u64)> = todo
+            .par_iter()
+            .map(|&r| {
+                let old = &self.source_rows[r as usize];
+                let renew = self.dirty[r as usize] || old.len() != self.links[r as usize].len();
+                let mut evaluations = 0;
+                let rows = self.links[r as usize]
+                    .iter()
+                    .enumerate()
+                    .map(|(k, l)| {
+                        if !renew && !grown[l.source as usize] {
+                            return old[k].clone();
+                        }
+                        let (w, e) = self.source_row(r, l);
+                        evaluations += e;
+                        w
+                    })
+                    .collect();
+                (rows, evaluations)
+            })
+            .collect();
+        for (r, (rows, evaluations)) in todo.into_iter().zip(built) {
+            self.source_rows[r as usize] = rows;
+            self.form_factors += evaluations;
+        }
+        grown.iter_mut().for_each(|g| *g = false);
+        self.split_since = grown;
+    }
+
     /// Rebuilds the rows of targets whose path has a changed node; clears the marks.
     pub(crate) fn rebuild_rows(&mut self) {
+        self.rebuild_source_rows();
         let n = self.nodes.len();
         // A node is stale if it or an ancestor is dirty (parents precede children).
         let mut stale = self.dirty.clone();

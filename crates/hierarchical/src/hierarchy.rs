@@ -15,6 +15,10 @@ use crate::transport::{NodeView, Transport};
 /// One cached gather entry of a target: the link (receiver node, index in its links) and its coefficient.
 pub(crate) type RowEntry<C> = (u32, u32, C);
 
+/// One leaf below a link's source and its normalised weight in what the link sends (double precision: in
+/// single precision the weights' sum misses one by 1e-7, which a furnace near ρ = 1 magnifies by 1/(1 − ρ)).
+pub(crate) type SourceWeight = (u32, f64);
+
 /// Marks "no node".
 pub const NONE: u32 = u32::MAX;
 
@@ -52,6 +56,12 @@ where
     pub(crate) rows: Vec<Vec<RowEntry<T::Coefficient>>>,
     /// Nodes whose links changed since the rows were last built (and new nodes).
     pub(crate) dirty: Vec<bool>,
+    /// Per receiver, per link (aligned with `links`): the leaves below the link's source and their
+    /// normalised weights in what it sends (A_y F_{y→r}, [`Transport::sends_source_radiosity`]); empty when
+    /// the source is a leaf or the link sends something else (its transport's emit).
+    pub(crate) source_rows: Vec<Vec<Vec<SourceWeight>>>,
+    /// Nodes split since the source rows were last built.
+    pub(crate) split_since: Vec<bool>,
     pub(crate) roots: Vec<u32>,
     /// Per root: whether its initial links as a source exist yet (lazy linking).
     pub(crate) linked: Vec<bool>,
@@ -105,6 +115,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             irradiance: Vec::with_capacity(n),
             rows: Vec::with_capacity(n),
             dirty: Vec::with_capacity(n),
+            source_rows: Vec::with_capacity(n),
+            split_since: Vec::with_capacity(n),
             roots: (0..n as u32).collect(),
             linked: vec![false; n],
             face_nodes: Vec::new(),
@@ -150,6 +162,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.links.push(Vec::new());
         self.rows.push(Vec::new());
         self.dirty.push(true);
+        self.source_rows.push(Vec::new());
+        self.split_since.push(false);
         self.radiosity.push(b);
         self.exitance.push(x);
         self.irradiance.push(h);
@@ -277,13 +291,25 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + size_of::<(u32, u32)>()
             + size_of::<Vec<Link>>()
             + size_of::<Vec<RowEntry<T::Coefficient>>>()
-            + 1
+            + size_of::<Vec<Vec<SourceWeight>>>()
+            + 2
             + 2 * size_of::<Rgb>()
             + size_of::<T::Exitance>()
             + size_of::<T::Irradiance>();
         let links: usize = self.links.iter().map(|l| l.capacity()).sum();
         let rows: usize = self.rows.iter().map(|r| r.capacity()).sum();
+        let (source_links, source_entries) =
+            self.source_rows
+                .iter()
+                .fold((0, 0), |(n, e), ls: &Vec<Vec<SourceWeight>>| {
+                    (
+                        n + ls.capacity(),
+                        e + ls.iter().map(|w| w.capacity()).sum::<usize>(),
+                    )
+                });
         (self.nodes.len() * per_node
+            + source_links * size_of::<Vec<SourceWeight>>()
+            + source_entries * size_of::<SourceWeight>()
             + self.face_nodes.capacity() * 4
             + links * size_of::<Link>()
             + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
@@ -336,6 +362,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
         self.children[i as usize] = (first, self.nodes.len() as u32 - first);
         self.dirty[i as usize] = true;
+        self.split_since[i as usize] = true;
     }
 
     /// Splits every node for which `split` holds, top down, before any link exists: a method whose

@@ -75,6 +75,15 @@ pub fn link_stream(a: u64, b: u64) -> u64 {
     sampling::mix64(lo ^ sampling::mix64(hi))
 }
 
+/// Mean of the point-to-polygon factor F_{dA(x)→src} over `recv`'s m × m Gauss points x: `recv`'s
+/// form factor to `src` by the receiver-side quadrature.
+pub fn kernel_mean(recv: &Patch, src: &Patch, m: u32) -> f64 {
+    receiver_points(&recv.polygon, m)
+        .iter()
+        .map(|(x, w)| w * point_polygon(*x, recv.normal, &src.polygon))
+        .sum()
+}
+
 /// The patch-to-patch transport: receiver quadrature of the point-to-polygon factor times sampled visibility;
 /// irradiance gathered per leaf ([`Gather::Leaf`]) or per link and pushed ([`Gather::Link`]).
 #[derive(Debug)]
@@ -111,10 +120,7 @@ impl<'a> PatchKernel<'a> {
 
     /// Mean of the point-to-polygon factor from `recv`'s quadrature points to `src`.
     pub fn kernel_mean(&self, recv: &Patch, src: &Patch) -> f64 {
-        receiver_points(&recv.polygon, self.quadrature)
-            .iter()
-            .map(|(x, w)| w * point_polygon(*x, recv.normal, &src.polygon))
-            .sum()
+        kernel_mean(recv, src, self.quadrature)
     }
 
     /// Mean, minimum and maximum of the point-to-polygon factor from `recv` to `src`: the mean over the

@@ -1,8 +1,10 @@
 //! One solution pass over the hierarchy: gather, push, pull (Hanrahan, Salzman & Aupperle 1991), each step
 //! as the node kind's [`Transport`] defines it:
 //!
-//! - gather: every link's flux J_l = emit(l) is delivered at its gather targets' rows, h_t = Σ c_{t,l} ⊗ J_l
-//!   (for patches H_r = Σ_{links r←s} V F_rs B_s), in parallel over targets;
+//! - gather: every link's flux J_l = emit(l) (for a link r ← s from an inner node of patches that sends
+//!   radiosity, J_l = Σ_y w_y B_y / Σ_y w_y over the leaves y below s, w_y = A_y F_{y→r}) is delivered at its
+//!   gather targets' rows, h_t = Σ c_{t,l} ⊗ J_l (for patches H_r = Σ_{links r←s} V F_rs B_s), in parallel
+//!   over targets;
 //! - push: each node adds what its parent passes down (patches: the parent's irradiance), and a leaf's
 //!   radiosity is B = E + ρ ⊙ H (the transport's reflect);
 //! - pull: an inner node's radiosity is the area mean of its children's, B_p = Σ_c A_c B_c / A_p, so the
@@ -47,11 +49,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .enumerate()
             .map(|(r, ls)| {
                 ls.iter()
-                    .map(|l| {
+                    .enumerate()
+                    .map(|(k, l)| {
                         if l.overlap {
-                            Rgb::ZERO
-                        } else {
-                            self.kernel.emit(&view, b, x, r as u32, l)
+                            return Rgb::ZERO;
+                        }
+                        match self.source_rows[r].get(k) {
+                            Some(ws) if !ws.is_empty() => ws
+                                .iter()
+                                .fold(Rgb::ZERO, |s, (y, w)| s + *w * b[*y as usize]),
+                            _ => self.kernel.emit(&view, b, x, r as u32, l),
                         }
                     })
                     .collect()

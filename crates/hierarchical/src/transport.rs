@@ -13,6 +13,11 @@
 //!   (B, x)_leaf = reflect(leaf, h)        radiosity (and any further exitance state) at each leaf,
 //!   B_p = Σ A_c B_c / A_p,  x_p = Σ x_c   pulled up.
 //!
+//! A link r ← s that sends its source's radiosity ([`Transport::sends_source_radiosity`]), from an inner
+//! node of patches to a patch, sends instead the mean of the radiosity of the leaves y below s weighted by
+//! how much each sees r (A_y F_{y→r}), not their area mean: the source side sends each leaf's own share, as
+//! the receiver side gathers at each leaf.
+//!
 //! For patches h is irradiance, J the source's radiosity and c = V F (the gather H = Σ V F B); for a
 //! face cluster h is an irradiance vector per channel and x a power vector; for a directional cluster h and x
 //! are spherical-harmonic coefficients. The transport chooses what each type is.
@@ -110,6 +115,15 @@ pub trait Transport<N: NodeKind>: Sync {
         recv: u32,
         link: &Link,
     ) -> Rgb;
+
+    /// Whether `link` sends its source's radiosity (its [`Transport::emit`] is the source's entry of `b`), so
+    /// that where the source is an inner node whose leaves and the receiver are patches
+    /// ([`NodeKind::patch`]) the engine sends in its place the mean of the leaves' radiosity weighted by how
+    /// much each sees the receiver, A_y F_{y→r} ([`crate::gather_rows`]). By default every link not
+    /// [`Link::clustered`].
+    fn sends_source_radiosity(&self, link: &Link) -> bool {
+        !link.clustered
+    }
 
     /// Adds to `h` what a target with coefficient `c` receives from a link sending `flux`.
     fn deliver(&self, h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Rgb);

@@ -294,10 +294,8 @@ fn emitted_power_is_absorbed_in_a_closed_unoccluded_scene() {
     }
     let scene = b.build().expect("scene");
     let accel = Accel::new(&scene);
-    // Rows are exact (each leaf's form factors sum to one); columns are exact only up to the source-side
-    // averaging of the hierarchy (a source node sends its children's mean radiosity with its own mean form
-    // factor), so the imbalance is small and shrinks with ε.
-    let mut imbalance = Vec::new();
+    // Rows are exact (each leaf's form factors sum to one), and so are columns up to quadrature: a source
+    // node sends its leaves' radiosity weighted by how much each sees the receiver.
     for epsilon in [0.08, 0.02] {
         let p = HierarchicalParams {
             tolerance: 1e-8,
@@ -306,21 +304,131 @@ fn emitted_power_is_absorbed_in_a_closed_unoccluded_scene() {
             ..leaf_params()
         };
         let s = solve(&scene, &accel, p);
-        let mut absorbed = Rgb::ZERO;
-        let e = s.engine();
-        for i in 0..e.nodes().len() as u32 {
-            if e.is_leaf(i) {
-                let n = &e.nodes()[i as usize];
-                // H = (B − E)/ρ; absorbed (1 − ρ) H.
-                let h = (e.radiosity()[i as usize] - n.emission) / n.reflectance;
-                absorbed += n.area * (Rgb::ONE - n.reflectance) * h;
+        assert_power_balanced(&s, &format!("epsilon {epsilon}"));
+    }
+}
+
+/// A unit box whose sides are 3 × 3 quads (inward normals), the centre of the ceiling a flush emitter
+/// (ρ = 0, so it absorbs what reaches it): convex, so nothing is occluded, yet lit unevenly.
+fn flush_lamp_box() -> Scene {
+    let mut b = SceneBuilder::new("flush-lamp-box");
+    let wall = b
+        .add_material(Material::new("wall", Rgb::new(0.6, 0.5, 0.3), Rgb::ZERO).expect("m"))
+        .expect("m");
+    let lamp = b
+        .add_material(Material::new("lamp", Rgb::ZERO, Rgb::splat(10.0)).expect("m"))
+        .expect("m");
+    let sides = [
+        (DVec3::ZERO, DVec3::X, DVec3::Y),
+        (DVec3::Z, DVec3::Y, DVec3::X), // the ceiling, normal −z
+        (DVec3::ZERO, DVec3::Y, DVec3::Z),
+        (DVec3::X, DVec3::Z, DVec3::Y),
+        (DVec3::ZERO, DVec3::Z, DVec3::X),
+        (DVec3::Y, DVec3::X, DVec3::Z),
+    ];
+    for (side, (o, u, v)) in sides.into_iter().enumerate() {
+        let (u, v) = (u / 3.0, v / 3.0);
+        for j in 0..3 {
+            for i in 0..3 {
+                let p = o + i as f64 * u + j as f64 * v;
+                let m = if side == 1 && i == 1 && j == 1 {
+                    lamp
+                } else {
+                    wall
+                };
+                b.add_polygon_points(&[p, p + u, p + u + v, p + v], m, "q")
+                    .expect("quad");
             }
         }
-        let emitted = scene.emitted_power();
-        imbalance.push(((absorbed - emitted) / emitted).abs().max_element());
     }
-    assert!(imbalance[1] < imbalance[0], "{imbalance:?}");
-    assert!(imbalance[1] < 3e-4, "{imbalance:?}");
+    b.build().expect("scene")
+}
+
+/// Asserts that the power absorbed at the leaves, Σ A (1 − ρ) H, differs from the emitted power by no more
+/// than what may remain in a convex scene when each link's exchange is integrated over its receiver's leaves
+/// (the gather) and weighted over its source's leaves (what the source sends): Σ over links of the source's
+/// brightest leaf times the difference of the two quadratures of the same exact A_r F_rs, Σ_t A_t F_{t→s}
+/// and Σ_y A_y F_{y→r}, plus what visibility rays that miss take (nothing occludes in a convex scene), plus
+/// the solver's remaining error (its estimate, relative to the leaves' total power Σ A B).
+fn assert_power_balanced(s: &HierarchicalSolver<'_>, what: &str) {
+    let e = s.engine();
+    let nodes = e.nodes();
+    let leaves_below = |i: u32| {
+        let mut out = Vec::new();
+        let mut stack = vec![i];
+        while let Some(j) = stack.pop() {
+            if e.is_leaf(j) {
+                out.push(j);
+            } else {
+                stack.extend(e.children(j));
+            }
+        }
+        out
+    };
+    let (mut absorbed, mut bound) = (Rgb::ZERO, Rgb::ZERO);
+    for i in 0..nodes.len() as u32 {
+        let n = &nodes[i as usize];
+        if e.is_leaf(i) {
+            absorbed += n.area * (Rgb::ONE - n.reflectance) * e.irradiance()[i as usize];
+        }
+        let recv = leaves_below(i);
+        for l in e.links_of(i) {
+            let src = &nodes[l.source as usize];
+            let ys = leaves_below(l.source);
+            let q_recv: f64 = recv
+                .iter()
+                .map(|&t| nodes[t as usize].area * e.kernel().kernel_mean(&nodes[t as usize], src))
+                .sum();
+            let q_src: f64 = ys
+                .iter()
+                .map(|&y| nodes[y as usize].area * e.kernel().kernel_mean(&nodes[y as usize], n))
+                .sum();
+            let brightest = ys
+                .iter()
+                .fold(Rgb::ZERO, |m, &y| m.max(e.radiosity()[y as usize]));
+            let v = l.visibility as f64;
+            bound += brightest * ((v * (q_recv - q_src)).abs() + (1.0 - v) * q_recv);
+        }
+    }
+    let residual = e.residual().expect("solved");
+    for (_, a, b) in s.leaves() {
+        bound += residual * a * b;
+    }
+    let emitted = s.scene().emitted_power();
+    let imbalance = (absorbed - emitted).abs() / emitted;
+    let bound = bound / emitted;
+    for k in 0..3 {
+        assert!(
+            imbalance[k] <= bound[k],
+            "{what}, channel {k}: imbalance {imbalance} exceeds the quadrature and visibility bound {bound}"
+        );
+    }
+}
+
+#[test]
+fn emitted_power_is_absorbed_under_the_light_driven_default_schedule() {
+    // The default oracle and schedule refine links from lit sources after solving, so receivers see one
+    // face through links at different levels: near ones through small elements, far ones through its whole
+    // area. A link from an inner node must then send the mean of its leaves weighted by how much each sees
+    // the receiver (A_y F_{y→r}); their area mean hands every leaf the same share of the far receivers,
+    // whatever its near ones took, and the column sums of the operator vary within a face against its
+    // radiosity (dark corners over-send, bright centres under-send): 1% to 2% of the power was lost here.
+    // What may remain: the receiver-side and the source-side quadratures of each link's exchange
+    // (Σ_t A_t F_{t→s} over the receiver's leaves and Σ_y A_y F_{y→r} over the source's, the same exact
+    // A_r F_rs), and visibility rays that miss (nothing occludes in a convex box), at the source's
+    // brightest leaf; the solver's own error is below its tolerance.
+    let scene = flush_lamp_box();
+    let accel = Accel::new(&scene);
+    let p = HierarchicalParams {
+        tolerance: 1e-9,
+        ..leaf_params()
+    };
+    let s = solve(&scene, &accel, p);
+    assert!(
+        s.stats().elements > 4 * scene.face_count() as u64,
+        "refined"
+    );
+    assert_power_balanced(&s, "defaults");
 }
 
 #[test]
