@@ -13,20 +13,20 @@
 //!
 //! | name | default | meaning |
 //! |---|---|---|
-//! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (exact cosine sums through normal cones), `directional` (spherical harmonics where a source straddles) |
+//! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (per-face cosines), `directional` (normal cones; spherical harmonics where a source straddles) |
 //! | `row_normalisation` | `closed-scenes` | in a closed scene, rescale each leaf's row of the operator to sum to one; `off` |
 //! | every parameter of `hierarchical` but `lazy_linking` | as there | ε, oracle, schedule, α, stages, minimum element, visibility rays per link (also for cluster links), quadrature, tolerance, gather (patch links), interpolation, memory budget |
 //!
 //! ## Transfers, side by side
 //! - `isotropic`: a cluster is a sphere of projected area A/4; O(1) per link. Biased: a flat cluster facing a
 //!   light receives a quarter of the truth, and a cluster's faces all get its mean irradiance.
-//! - `alpha`: J = Σ A_i max(0, n_i·d) B_i of a cluster source and each receiving face's own cosine share,
-//!   both exact through the clusters' normal cones ([`normal_cone`]): a source every face of which faces d
-//!   sends P·d (P = Σ A_i B_i n_i), a straddling one sums its children; a receiving cluster every face of
-//!   which faces the source gathers the link's irradiance field (value and gradient at its centroid, pushed
-//!   to its faces), and only links that straddle its faces are evaluated face by face.
-//! - `directional`: the same receiver; a straddling source cluster sends the order-2 spherical-harmonic
-//!   estimate of J (O(1) per link), instead of α's descent into its children.
+//! - `alpha`: a cluster source sums Σ A_i max(0, n_i·d) B_i over its faces at every pass; a cluster receiver
+//!   hands each face its own cosine share. O(faces) per link, every face below a cluster link touched each pass.
+//! - `directional`: a cluster source every face of which faces d sends P·d (P = Σ A_i B_i n_i), one that
+//!   straddles d the order-2 spherical-harmonic estimate of J; a receiving cluster every face of which faces
+//!   the source gathers the link's irradiance field (value and gradient at its centroid, pushed to its
+//!   faces), links behind every face carry nothing, and only links that straddle its faces are evaluated
+//!   face by face ([`normal_cone`]). O(1) per link but for straddling receivers.
 //!
 //! ## Cost
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
@@ -40,7 +40,7 @@
 //!   links are: their per-leaf gather sums to one), so a defect δ in a row sum of the discrete operator
 //!   becomes δρ/(1 − ρ) in B. Measured on `concentric-spheres?faces=600` with `row_normalisation = "off"`
 //!   (the `row_sums` example: area-mean row sum − 1, then the area-mean error of B against E/(1 − ρ)):
-//!   α δ = −4.2e-4 (−0.45%, −4.1%, −29% at ρ = 0.9, 0.99, 0.999); directional δ = −4.0e-4 (−0.36%,
+//!   α δ = −3.2e-4 to −3.9e-4 (−0.35%, −3.2%, −24% at ρ = 0.9, 0.99, 0.999); directional δ = −4.0e-4 (−0.36%,
 //!   −3.8%, −28%); isotropic δ = −2.3e-2, inner sphere −0.10 (−18%, −70%). Before the normal cones
 //!   directional's receiver took order-2 harmonics of every link, leaking 6–9% of a lobe's peak behind each
 //!   face: δ = +8.7e-4, inner sphere +4.8e-3, rows up to 1.030 (+0.74%, +9.4% at ρ = 0.9, 0.99). In a closed
@@ -51,8 +51,8 @@
 //! - `isotropic` loses energy wherever clusters are flat-ish (a cap of a sphere seen face-on is a quarter of
 //!   its true projected area at each end).
 //! - Occlusion inside a cluster is averaged into one number per link (Sillion & Drettakis 1995) for
-//!   every transfer (`alpha` and `directional` give each receiving face its own cosine and, to first order,
-//!   distance, not its own visibility).
+//!   every transfer (`alpha` gives each receiving face its own cosine and distance, `directional` its own
+//!   cosine and, to first order, distance; neither its own visibility).
 //!   A mean visibility times a mean source flux could carry light through walls into sealed interiors inside a
 //!   receiving cluster; faces sealed off from every emitter are found once by 16 rays per face
 //!   ([`enclosure`]) and receive nothing.
@@ -77,5 +77,5 @@ pub use loose_octree::{Cluster, ClusterTree, OctreeItem};
 pub use params::{RowNormalisation, Transfer, VolumeClusterParams};
 pub use solver::{ClusterSolver, VolumeClusterSolver};
 pub use transfer_alpha::Alpha;
-pub use transfer_directional::{Directional, DirectionalExitance};
+pub use transfer_directional::{Directional, DirectionalExitance, HarmonicSource};
 pub use transfer_isotropic::Isotropic;

@@ -1,7 +1,7 @@
 //! Normal cones of clusters and the oriented receiver they make exact and cheap. A cluster's normal cone is
 //! the smallest cone about the area-weighted mean normal a = Σ A_i n_i/|Σ A_i n_i| holding every face
-//! normal, half-angle θ = max_i ∠(a, n_i) (the cones Shirley's and Sillion's clustering work uses to bound
-//! orientation; here exact bounds over the cluster's faces). For a unit direction u at angle φ from a:
+//! normal, half-angle θ = max_i ∠(a, n_i) (Shirman & Abi-Ezzi 1993's cone of normals, here an exact bound
+//! over the cluster's faces). For a unit direction u at angle φ from a:
 //!
 //! - φ + θ ≤ π/2: every face has n_i·u ≥ 0, so Σ_i A_i B_i max(0, n_i·u) = P·u with the power vector
 //!   P = Σ_i A_i B_i n_i (exact: a cluster source facing u is a vector source);
@@ -21,12 +21,14 @@
 
 use std::f64::consts::FRAC_PI_2;
 
+use std::fmt::Debug;
+
 use glam::{DMat3, DVec3};
-use radlab_hierarchical::{GatherAt, LinearState, NodeKind};
+use radlab_hierarchical::{GatherAt, LinearState, NodeKind, NodeView};
 use radlab_scene::Rgb;
 
 use crate::cluster_node::ClusterNode;
-use crate::cluster_transport::reflect_node;
+use crate::cluster_transport::{TransferMode, reflect_node};
 
 /// The cone of a cluster's face normals.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -153,102 +155,136 @@ pub enum OrientedCoefficient {
     Field(DVec3, f64),
 }
 
-/// The ratio R/r (a receiving cluster's bounding radius over its centroid distance from the source) up to
-/// which `alpha` gathers a link at the cluster rather than face by face. The first-order field's error at a
-/// face is second order, about 2 (R/r)² of its value (a plate facing a source square on:
-/// (1 + δ²/r²)^(−2) ≈ 1 − 2δ²/r², the first-order term vanishing; measured 3.3% at R/r = 0.14), so 0.07
-/// keeps every face within 1% of α's face-by-face gather. `directional` gathers at any ratio
-/// ([`f64::INFINITY`]): O(1) per link, the second-order error cancelling on the mean over a cluster.
-pub const ALPHA_FAR_RATIO: f64 = 0.07;
-
-/// Where a link from `src` to cluster `recv` is gathered: at the cluster if it is far (bounding radius at
-/// most `far_ratio` of the centroid distance) and every face below faces the source's centroid or every
-/// face faces away; else at each face.
-pub fn oriented_gather_at(
-    recv: &ClusterNode<'_>,
-    src: &ClusterNode<'_>,
-    far_ratio: f64,
-) -> GatherAt {
-    let v = src.centroid() - recv.centroid();
-    let r = v.length();
-    if !(recv.bound().radius <= far_ratio * r) {
-        return GatherAt::Faces;
-    }
-    match cone_of(recv).side(v / r) {
+/// Where a link from `src` to cluster `recv` is gathered: at the cluster if every face below faces the
+/// source's centroid or every face faces away; else at each face. At any distance: the first-order field's
+/// error at a face is second order in R/r (the cluster's bounding radius over the distance), about
+/// 2 (R/r)² of its value (a plate facing a source square on: (1 + δ²/r²)^(−2) ≈ 1 − 2δ²/r², the
+/// first-order term vanishing; measured 3.3% at R/r = 0.14), and cancels to first order on the mean over
+/// the cluster. (Gathered at the cluster only below R/r = 0.07, within 1% of a face-by-face gather, no link
+/// qualified on the concentric spheres up to k = 1e4.)
+fn oriented_gather_at(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
+    let u = (src.centroid() - recv.centroid()).normalize_or_zero();
+    match cone_of(recv).side(u) {
         Side::Straddle => GatherAt::Faces,
         Side::Front | Side::Back => GatherAt::Receiver,
     }
 }
 
-/// The coefficient at cluster `target` of a link with coefficient `g` = V/(π r²) and direction `d` from
-/// source to receiver, at distance `r`: the irradiance field of a point source, V (s − x)/(π |s − x|³), and
-/// its gradient at the cluster's centroid.
-pub fn oriented_at_cluster(
-    target: &ClusterNode<'_>,
-    g: f64,
-    d: DVec3,
-    r: f64,
-) -> OrientedCoefficient {
-    let u = -d;
-    match cone_of(target).side(u) {
-        Side::Front if r > 0.0 => OrientedCoefficient::Field(g * u, 1.0 / r),
-        _ => OrientedCoefficient::Field(DVec3::ZERO, 0.0),
-    }
+/// The source half of an oriented transfer: what a cluster sends toward d, from its exitance state. The
+/// receiver half, the normal cones', is [`Oriented`]'s.
+pub trait OrientedSource: Sync + Send + Debug + Default {
+    /// What a node sends besides its radiosity, summed from children to parent.
+    type Exitance: LinearState;
+    /// J_S(d) = Σ_i A_i B_i max(0, n_i·d) of cluster `src`, or the transfer's estimate of it.
+    fn cluster_flux(
+        view: &NodeView<'_, ClusterNode<'_>>,
+        b: &[Rgb],
+        x: &[Self::Exitance],
+        src: u32,
+        d: DVec3,
+    ) -> Rgb;
+    /// The exitance of a leaf patch of radiosity `b`.
+    fn exitance(leaf: &ClusterNode<'_>, b: Rgb) -> Self::Exitance;
 }
 
-/// h += c ⊗ flux.
-pub fn oriented_deliver(h: &mut OrientedIrradiance, c: &OrientedCoefficient, flux: Rgb) {
-    match c {
-        OrientedCoefficient::Scalar(s) => h.scalar += *s * flux,
-        OrientedCoefficient::Field(e, inv_r) => {
-            let g = e.length();
-            if g > 0.0 {
-                let t = *inv_r
-                    * (3.0 / g * DMat3::from_cols(e.x * *e, e.y * *e, e.z * *e)
-                        - g * DMat3::IDENTITY);
-                for k in 0..3 {
-                    h.vector[k] += flux[k] * *e;
-                    h.gradient[k] += flux[k] * t;
+/// An oriented transfer: source `S`, the normal cones' receiver.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Oriented<S>(pub S);
+
+impl<S: OrientedSource> TransferMode for Oriented<S> {
+    type Irradiance = OrientedIrradiance;
+    type Exitance = S::Exitance;
+    type Coefficient = OrientedCoefficient;
+
+    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
+        oriented_gather_at(recv, src)
+    }
+
+    fn scalar(c: f64) -> OrientedCoefficient {
+        OrientedCoefficient::Scalar(c)
+    }
+
+    /// The irradiance field of a point source, V (s − x)/(π |s − x|³), at the cluster's centroid, with its
+    /// gradient formed at deliver.
+    fn at_cluster(target: &ClusterNode<'_>, g: f64, d: DVec3, r: f64) -> OrientedCoefficient {
+        let u = -d;
+        match cone_of(target).side(u) {
+            Side::Front if r > 0.0 => OrientedCoefficient::Field(g * u, 1.0 / r),
+            _ => OrientedCoefficient::Field(DVec3::ZERO, 0.0),
+        }
+    }
+
+    fn cluster_flux(
+        view: &NodeView<'_, ClusterNode<'_>>,
+        b: &[Rgb],
+        x: &[S::Exitance],
+        src: u32,
+        d: DVec3,
+    ) -> Rgb {
+        S::cluster_flux(view, b, x, src, d)
+    }
+
+    fn deliver(h: &mut OrientedIrradiance, c: &OrientedCoefficient, flux: Rgb) {
+        match c {
+            OrientedCoefficient::Scalar(s) => h.scalar += *s * flux,
+            OrientedCoefficient::Field(e, inv_r) => {
+                let g = e.length();
+                if g > 0.0 {
+                    let t = *inv_r
+                        * (3.0 / g * DMat3::from_cols(e.x * *e, e.y * *e, e.z * *e)
+                            - g * DMat3::IDENTITY);
+                    for k in 0..3 {
+                        h.vector[k] += flux[k] * *e;
+                        h.gradient[k] += flux[k] * t;
+                    }
                 }
             }
         }
     }
-}
 
-/// What a child receives of its parent's irradiance: a cluster's field moved to the child's centroid,
-/// E(c') = E(c) + ∇E (c' − c), to a child cluster; n·E(x) at a patch's centroid x (the mean over the patch of
-/// a linear field) to a patch, unclamped so that the operator stays linear (a clamp stalls the solver's
-/// convergence test; n·E is a first-order expansion of a sum of non-negative terms, negative only where the
-/// expansion is off by more than its value); a patch's scalar to its pieces.
-pub fn oriented_push(
-    parent: &ClusterNode<'_>,
-    child: &ClusterNode<'_>,
-    h: &OrientedIrradiance,
-) -> OrientedIrradiance {
-    let ClusterNode::Cluster(_) = parent else {
-        return *h;
-    };
-    let dx = child.centroid() - parent.centroid();
-    let field: [DVec3; 3] = std::array::from_fn(|k| h.vector[k] + h.gradient[k] * dx);
-    match child.normal() {
-        Some(n) => OrientedIrradiance {
-            scalar: h.scalar + dot3(&field, n),
-            ..OrientedIrradiance::default()
-        },
-        None => OrientedIrradiance {
-            scalar: h.scalar,
-            vector: field,
-            gradient: h.gradient,
-        },
+    /// A cluster's field moved to the child's centroid, E(c') = E(c) + ∇E (c' − c), to a child cluster;
+    /// n·E(x) at a patch's centroid x (the mean over the patch of a linear field) to a patch, unclamped so
+    /// that the operator stays linear (a clamp stalls the solver's convergence test; n·E is a first-order
+    /// expansion of a sum of non-negative terms, negative only where the expansion is off by more than its
+    /// value); a patch's scalar to its pieces.
+    fn push(
+        parent: &ClusterNode<'_>,
+        child: &ClusterNode<'_>,
+        h: &OrientedIrradiance,
+    ) -> OrientedIrradiance {
+        let ClusterNode::Cluster(_) = parent else {
+            return *h;
+        };
+        let dx = child.centroid() - parent.centroid();
+        let field: [DVec3; 3] = std::array::from_fn(|k| h.vector[k] + h.gradient[k] * dx);
+        match child.normal() {
+            Some(n) => OrientedIrradiance {
+                scalar: h.scalar + dot3(&field, n),
+                ..OrientedIrradiance::default()
+            },
+            None => OrientedIrradiance {
+                scalar: h.scalar,
+                vector: field,
+                gradient: h.gradient,
+            },
+        }
     }
-}
 
-/// B = E + ρ H of a leaf patch and its power vector.
-pub fn oriented_reflect(
-    leaf: &ClusterNode<'_>,
-    h: &OrientedIrradiance,
-    with_emission: bool,
-) -> (Rgb, [DVec3; 3]) {
-    let b = reflect_node(leaf, h.scalar, with_emission);
-    (b, power_vector(leaf, b))
+    fn reflect(
+        leaf: &ClusterNode<'_>,
+        h: &OrientedIrradiance,
+        with_emission: bool,
+    ) -> (Rgb, S::Exitance) {
+        let b = reflect_node(leaf, h.scalar, with_emission);
+        (b, S::exitance(leaf, b))
+    }
+
+    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, S::Exitance) {
+        let b = leaf.reflectance();
+        (b, S::exitance(leaf, b))
+    }
+
+    fn unit(leaf: &ClusterNode<'_>) -> S::Exitance {
+        S::exitance(leaf, Rgb::ONE)
+    }
 }

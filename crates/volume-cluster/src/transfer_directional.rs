@@ -20,20 +20,19 @@
 //! trade that excess for a deficit elsewhere; the cone test removes it where it arises.
 
 use glam::DVec3;
-use radlab_hierarchical::{GatherAt, LinearState, NodeView};
+use radlab_hierarchical::{LinearState, NodeView};
 use radlab_scene::Rgb;
 
 use crate::cluster_node::ClusterNode;
-use crate::cluster_transport::TransferMode;
-use crate::normal_cone::{
-    OrientedCoefficient, OrientedIrradiance, Side, dot3, oriented_at_cluster, oriented_deliver,
-    oriented_gather_at, oriented_push, oriented_reflect, power_vector,
-};
+use crate::normal_cone::{Oriented, OrientedSource, Side, dot3, power_vector};
 use crate::spherical_harmonics::{clamped_cosine, evaluate};
 
-/// Directional clusters.
+/// The spherical-harmonic source of directional clusters.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Directional;
+pub struct HarmonicSource;
+
+/// Directional clusters.
+pub type Directional = Oriented<HarmonicSource>;
 
 /// What a node sends, per channel: spherical-harmonic coefficients of J(d) and the power vector.
 #[derive(Clone, Copy, Debug, Default)]
@@ -72,22 +71,8 @@ fn patch_exitance(leaf: &ClusterNode<'_>, b: Rgb) -> DirectionalExitance {
     }
 }
 
-impl TransferMode for Directional {
-    type Irradiance = OrientedIrradiance;
+impl OrientedSource for HarmonicSource {
     type Exitance = DirectionalExitance;
-    type Coefficient = OrientedCoefficient;
-
-    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
-        oriented_gather_at(recv, src, f64::INFINITY)
-    }
-
-    fn scalar(c: f64) -> OrientedCoefficient {
-        OrientedCoefficient::Scalar(c)
-    }
-
-    fn at_cluster(target: &ClusterNode<'_>, g: f64, d: DVec3, r: f64) -> OrientedCoefficient {
-        oriented_at_cluster(target, g, d, r)
-    }
 
     fn cluster_flux(
         view: &NodeView<'_, ClusterNode<'_>>,
@@ -107,33 +92,7 @@ impl TransferMode for Directional {
         }
     }
 
-    fn deliver(h: &mut OrientedIrradiance, c: &OrientedCoefficient, flux: Rgb) {
-        oriented_deliver(h, c, flux);
-    }
-
-    fn push(
-        parent: &ClusterNode<'_>,
-        child: &ClusterNode<'_>,
-        h: &OrientedIrradiance,
-    ) -> OrientedIrradiance {
-        oriented_push(parent, child, h)
-    }
-
-    fn reflect(
-        leaf: &ClusterNode<'_>,
-        h: &OrientedIrradiance,
-        with_emission: bool,
-    ) -> (Rgb, DirectionalExitance) {
-        let (b, _) = oriented_reflect(leaf, h, with_emission);
-        (b, patch_exitance(leaf, b))
-    }
-
-    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, DirectionalExitance) {
-        let b = radlab_hierarchical::NodeKind::reflectance(leaf);
-        (b, patch_exitance(leaf, b))
-    }
-
-    fn unit(leaf: &ClusterNode<'_>) -> DirectionalExitance {
-        patch_exitance(leaf, Rgb::ONE)
+    fn exitance(leaf: &ClusterNode<'_>, b: Rgb) -> DirectionalExitance {
+        patch_exitance(leaf, b)
     }
 }

@@ -283,7 +283,7 @@ fn no_face_of_a_cluster_receives_light_from_behind_its_plane() {
     }
     // From the front, directional gathers the link at the plate, at any distance: each face takes the
     // light's field to first order about the plate's centroid, whose error is second order in the plate's
-    // bounding radius R = √2/2 over the distance r = 5, about 2 (R/r)² = 4% (normal_cone::ALPHA_FAR_RATIO),
+    // bounding radius R = √2/2 over the distance r = 5, about 2 (R/r)² = 4% (crate::normal_cone's gather),
     // on top of α's 1% from the light's own cosine.
     let (r_over_d, cosine) = (0.5f64.sqrt() / 5.0, 0.0101);
     let tolerance = cosine + 2.0 * r_over_d * r_over_d;
