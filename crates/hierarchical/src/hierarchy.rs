@@ -77,6 +77,10 @@ where
     pub(crate) refine_changed: bool,
     // Solver state.
     pub(crate) coarse_mu: Option<(Vec<Rgb>, Vec<T::Exitance>)>,
+    /// Whether leaf irradiance is rescaled so that every row sums to one (a closed scene).
+    pub(crate) normalise_rows: bool,
+    /// Per node, the factor its irradiance is multiplied by before reflection (empty: none).
+    pub(crate) row_scale: Vec<Rgb>,
     pub(crate) coarse_denominator: Rgb,
     /// Number of lit leaves when the coarse mode was computed.
     pub(crate) coarse_support: usize,
@@ -128,6 +132,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             stage_changed: false,
             refine_changed: false,
             coarse_mu: None,
+            normalise_rows: false,
+            row_scale: Vec::new(),
             coarse_denominator: Rgb::ZERO,
             coarse_support: 0,
             passes_since_change: 0,

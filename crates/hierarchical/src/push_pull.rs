@@ -41,6 +41,28 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         x: &[T::Exitance],
         with_emission: bool,
     ) -> (Field<T::Exitance>, Vec<T::Irradiance>) {
+        let h = self.gather_push(b, x, true);
+        // Reflect at leaves.
+        let (mut out_b, mut out_x): (Vec<Rgb>, Vec<T::Exitance>) = self
+            .nodes
+            .par_iter()
+            .zip(&self.children)
+            .zip(&h)
+            .map(|((node, c), h)| {
+                if c.1 == 0 {
+                    self.kernel.reflect(node, h, with_emission)
+                } else {
+                    (Rgb::ZERO, T::Exitance::default())
+                }
+            })
+            .unzip();
+        self.pull(&mut out_b, &mut out_x);
+        ((out_b, out_x), h)
+    }
+
+    /// Gather and push: every node's total irradiance when the nodes send `b` and `x`; leaves' irradiance
+    /// multiplied by the row normalisation when `scaled` and it is on.
+    fn gather_push(&self, b: &[Rgb], x: &[T::Exitance], scaled: bool) -> Vec<T::Irradiance> {
         let view = self.view();
         // What each link sends.
         let flux: Vec<Vec<Rgb>> = self
@@ -87,22 +109,85 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 h[i].add_scaled(Rgb::ONE, &down);
             }
         }
-        // Reflect at leaves.
-        let (mut out_b, mut out_x): (Vec<Rgb>, Vec<T::Exitance>) = self
-            .nodes
-            .par_iter()
-            .zip(&self.children)
-            .zip(&h)
-            .map(|((node, c), h)| {
-                if c.1 == 0 {
-                    self.kernel.reflect(node, h, with_emission)
-                } else {
-                    (Rgb::ZERO, T::Exitance::default())
+        if scaled && self.row_scale.len() == h.len() {
+            for (i, hi) in h.iter_mut().enumerate() {
+                if self.children[i].1 == 0 {
+                    let mut t = T::Irradiance::default();
+                    t.add_scaled(self.row_scale[i], hi);
+                    *hi = t;
                 }
+            }
+        }
+        h
+    }
+
+    /// Row sums of the discrete operator in use, per node and channel: the irradiance every leaf gathers
+    /// (after push, and after the row normalisation if it is on) when every leaf sends B = 1 (the transport's
+    /// `unit_response`); zero at inner nodes, and everywhere if the transport has no unit response. One in a
+    /// closed scene if the links' coefficients were exact; a defect δ becomes δρ/(1 − ρ) in the furnace
+    /// B = E/(1 − ρ). The rows must be current (after a step).
+    pub fn row_sums(&self) -> Vec<Rgb> {
+        self.unit_gather(true)
+    }
+
+    /// The scalar irradiance of every leaf when every leaf sends B = 1 (`scaled`: with the row
+    /// normalisation applied). A leaf's scalar irradiance is read through its reflection, H = B/ρ per channel
+    /// (zero where ρ is zero: such a leaf reflects nothing, whatever it receives).
+    fn unit_gather(&self, scaled: bool) -> Vec<Rgb> {
+        let n = self.nodes.len();
+        let mut u = vec![Rgb::ZERO; n];
+        let mut ux = vec![T::Exitance::default(); n];
+        for i in 0..n {
+            if self.children[i].1 == 0 {
+                match self.kernel.unit_response(&self.nodes[i]) {
+                    Some((b, x)) => (u[i], ux[i]) = (b, x),
+                    None => return vec![Rgb::ZERO; n],
+                }
+            }
+        }
+        self.pull(&mut u, &mut ux);
+        let h = self.gather_push(&u, &ux, scaled);
+        (0..n)
+            .map(|i| {
+                if self.children[i].1 != 0 {
+                    return Rgb::ZERO;
+                }
+                let node = &self.nodes[i];
+                let (b, _) = self.kernel.reflect(node, &h[i], false);
+                let rho = node.reflectance();
+                Rgb::new(
+                    per_unit(b.x, rho.x),
+                    per_unit(b.y, rho.y),
+                    per_unit(b.z, rho.z),
+                )
             })
-            .unzip();
-        self.pull(&mut out_b, &mut out_x);
-        ((out_b, out_x), h)
+            .collect()
+    }
+
+    /// Turns the row normalisation on or off. On, after every change of the links each leaf's gathered
+    /// irradiance is multiplied, per channel, by 1/R_l, R_l its row sum ([`Engine::row_sums`] before
+    /// normalisation), so every row sums to exactly one. Correct only for a closed scene, where the exact
+    /// form factors from any point sum to one (the summation relation of an enclosure, Goral, Torrance,
+    /// Greenberg & Battaile 1984): the caller decides that the scene is closed. A leaf that gathers nothing
+    /// (R = 0: sealed off, or ρ = 0) is left alone. Needs the transport's `unit_response`; without it this
+    /// does nothing.
+    pub fn normalise_closed_rows(&mut self, on: bool) {
+        self.normalise_rows = on;
+        self.row_scale.clear();
+        self.operator_changed();
+    }
+
+    /// Recomputes the row normalisation for the current rows.
+    fn update_row_scale(&mut self) {
+        self.row_scale.clear();
+        if !self.normalise_rows {
+            return;
+        }
+        let r = self.unit_gather(false);
+        self.row_scale = r
+            .iter()
+            .map(|r| Rgb::new(inverse(r.x), inverse(r.y), inverse(r.z)))
+            .collect();
     }
 
     /// Sets every inner node to the area mean of its children's radiosity and the sum of their exitance
@@ -172,6 +257,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     pub(crate) fn solve_pass(&mut self) -> Result<f64, SolveError> {
         if self.dirty.iter().any(|&d| d) {
             self.rebuild_rows();
+            self.update_row_scale();
+        } else if self.normalise_rows && self.row_scale.len() != self.nodes.len() {
+            self.update_row_scale();
         }
         // The coarse mode lives on the leaves light has reached: a closed interior that no light can enter
         // stays exactly dark (its leaves may still link to each other).
@@ -254,5 +342,19 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.residual = Some(if estimate.is_finite() { estimate } else { step });
         self.converged = estimate < self.params.tolerance;
         Ok(estimate)
+    }
+}
+
+/// b/ρ: the irradiance H behind a leaf's reflected b = ρ H, zero where ρ is zero.
+fn per_unit(b: f64, rho: f64) -> f64 {
+    if rho > 0.0 { b / rho } else { 0.0 }
+}
+
+/// 1/r, or 1 where r is not a positive row sum (nothing gathered: nothing to rescale).
+fn inverse(r: f64) -> f64 {
+    if r > 0.0 && r.is_finite() {
+        1.0 / r
+    } else {
+        1.0
     }
 }

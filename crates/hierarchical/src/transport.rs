@@ -142,6 +142,15 @@ pub trait Transport<N: NodeKind>: Sync {
     /// A leaf's radiosity and exitance under unit irradiance from every direction, without emission (a
     /// patch: B = ρ): the furnace mode the engine's coarse correction removes in one pass.
     fn uniform_response(&self, leaf: &N) -> (Rgb, Self::Exitance);
+
+    /// A leaf's radiosity and exitance when it sends B = 1 on every channel, whatever its reflectance: the
+    /// source state with which a gather measures the discrete operator's row sums Σ_s K_ls
+    /// ([`crate::Engine::normalise_closed_rows`]). `None` (the default) when the transport does not say; row
+    /// normalisation is then unavailable.
+    fn unit_response(&self, leaf: &N) -> Option<(Rgb, Self::Exitance)> {
+        let _ = leaf;
+        None
+    }
 }
 
 /// Read-only access to the hierarchy's structure, for transports whose sources read their contents.

@@ -36,12 +36,13 @@ pub trait TransferMode: Sync + Send + Debug + Default {
     type Exitance: LinearState;
     /// A link's coefficient at a gather target.
     type Coefficient: Copy + Send + Sync + Debug;
-    /// Where links to a cluster receiver are evaluated.
-    const AT_CLUSTER: GatherAt;
+    /// Where the link from `src` to cluster `recv` is evaluated.
+    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt;
     /// A scalar coefficient (irradiance per unit flux) at a patch target.
     fn scalar(c: f64) -> Self::Coefficient;
-    /// The coefficient at a cluster receiver: link coefficient `g` = V/(π r²), direction `d` source → receiver.
-    fn at_cluster(g: f64, d: DVec3) -> Self::Coefficient;
+    /// The coefficient at cluster receiver `target`: link coefficient `g` = V/(π r²), direction `d` source →
+    /// receiver, centroid distance `r`.
+    fn at_cluster(target: &ClusterNode<'_>, g: f64, d: DVec3, r: f64) -> Self::Coefficient;
     /// J_S(d) of cluster `src`.
     fn cluster_flux(
         view: &NodeView<'_, ClusterNode<'_>>,
@@ -66,9 +67,11 @@ pub trait TransferMode: Sync + Send + Debug + Default {
     ) -> (Rgb, Self::Exitance);
     /// A leaf's radiosity and exitance under unit irradiance, without emission (B = ρ).
     fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, Self::Exitance);
+    /// A leaf's exitance when it sends B = 1.
+    fn unit(leaf: &ClusterNode<'_>) -> Self::Exitance;
 }
 
-/// A transfer whose states are scalar irradiance and radiosity (isotropic and α clusters): only where a cluster
+/// A transfer whose states are scalar irradiance and radiosity (isotropic clusters): only where a cluster
 /// receiver's links are evaluated, the coefficient there and what a cluster source sends differ; the scalar
 /// gather, push (children inherit the parent's irradiance unchanged) and reflection are shared.
 pub trait ScalarTransfer: Sync + Send + Debug + Default {
@@ -84,13 +87,16 @@ impl<S: ScalarTransfer> TransferMode for S {
     type Irradiance = Rgb;
     type Exitance = ();
     type Coefficient = f64;
-    const AT_CLUSTER: GatherAt = <S as ScalarTransfer>::AT_CLUSTER;
+
+    fn gather_at_cluster(_recv: &ClusterNode<'_>, _src: &ClusterNode<'_>) -> GatherAt {
+        <S as ScalarTransfer>::AT_CLUSTER
+    }
 
     fn scalar(c: f64) -> f64 {
         c
     }
 
-    fn at_cluster(g: f64, d: DVec3) -> f64 {
+    fn at_cluster(_target: &ClusterNode<'_>, g: f64, d: DVec3, _r: f64) -> f64 {
         <S as ScalarTransfer>::at_cluster(g, d)
     }
 
@@ -119,6 +125,8 @@ impl<S: ScalarTransfer> TransferMode for S {
     fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, ()) {
         (leaf.reflectance(), ())
     }
+
+    fn unit(_leaf: &ClusterNode<'_>) {}
 }
 
 /// The transport, generic over the transfer mode.
@@ -209,7 +217,7 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
     fn gather_at(&self, recv: &ClusterNode<'a>, src: &ClusterNode<'a>) -> GatherAt {
         match (recv, src) {
             (ClusterNode::Patch(_), ClusterNode::Patch(_)) => self.patches.patch_gather_at(),
-            (ClusterNode::Cluster(_), _) => M::AT_CLUSTER,
+            (ClusterNode::Cluster(_), _) => M::gather_at_cluster(recv, src),
             (ClusterNode::Patch(_), ClusterNode::Cluster(_)) => GatherAt::Receiver,
         }
     }
@@ -228,8 +236,8 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
         }
         match target {
             ClusterNode::Cluster(_) => {
-                let (d, _) = centroid_geometry(target.centroid(), src.centroid());
-                M::at_cluster(link.coefficient, d)
+                let (d, r2) = centroid_geometry(target.centroid(), src.centroid());
+                M::at_cluster(target, link.coefficient, d, r2.sqrt())
             }
             ClusterNode::Patch(p) => {
                 // The point approximation averaged over the patch's Gauss points (the rule its patch links
@@ -307,6 +315,10 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
             // light that can arrive here.
             M::reflect(leaf, &M::Irradiance::default(), with_emission)
         }
+    }
+
+    fn unit_response(&self, leaf: &ClusterNode<'a>) -> Option<(Rgb, M::Exitance)> {
+        Some((Rgb::ONE, M::unit(leaf)))
     }
 
     fn uniform_response(&self, leaf: &ClusterNode<'a>) -> (Rgb, M::Exitance) {

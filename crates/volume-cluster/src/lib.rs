@@ -13,7 +13,8 @@
 //!
 //! | name | default | meaning |
 //! |---|---|---|
-//! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (per-face cosines), `directional` (spherical harmonics) |
+//! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (per-face cosines), `directional` (normal cones; spherical harmonics where a source straddles) |
+//! | `row_normalisation` | `closed-scenes` | in a closed scene, rescale each leaf's row of the operator to sum to one; `off` |
 //! | every parameter of `hierarchical` but `lazy_linking` | as there | ε, oracle, schedule, α, stages, minimum element, visibility rays per link (also for cluster links), quadrature, tolerance, gather (patch links), interpolation, memory budget |
 //!
 //! ## Transfers, side by side
@@ -21,10 +22,11 @@
 //!   light receives a quarter of the truth, and a cluster's faces all get its mean irradiance.
 //! - `alpha`: a cluster source sums Σ A_i max(0, n_i·d) B_i over its faces at every pass; a cluster receiver
 //!   hands each face its own cosine share. O(faces) per link, every face below a cluster link touched each pass.
-//! - `directional`: clusters keep order-2 spherical harmonics of what they send and receive; O(1) per link,
-//!   faces reached through push. Chosen over irradiance vectors because a volume cluster is typically closed
-//!   (Σ A_i n_i ≈ 0: a vector source would emit nothing) and over direction bins because both sides are
-//!   clamped cosines, which order 2 represents within a few percent.
+//! - `directional`: a cluster source every face of which faces d sends P·d (P = Σ A_i B_i n_i), one that
+//!   straddles d the order-2 spherical-harmonic estimate of J; a receiving cluster every face of which faces
+//!   the source gathers the link's irradiance field (value and gradient at its centroid, pushed to its
+//!   faces), links behind every face carry nothing, and only links that straddle its faces are evaluated
+//!   face by face ([`normal_cone`]). O(1) per link but for straddling receivers.
 //!
 //! ## Cost
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
@@ -35,15 +37,22 @@
 //! - Blocky, axis-aligned artefacts where links stop above the faces: every face of a receiving cluster gets
 //!   one visibility fraction (and, for `isotropic`, one irradiance).
 //! - Near ρ = 1: a cluster link's point approximation is not an exact partition of what a face sees (patch
-//!   links are: their per-leaf gather sums to one), so its error is multiplied by about 1/(1 − ρ). Measured on
-//!   `concentric-spheres?faces=600` at the defaults (area-mean error of B against E/(1 − ρ)): α −0.6%, −5.4%,
-//!   −38%, −86% at ρ = 0.5, 0.9, 0.99, 0.999; directional −0.4%, −4.9%, −36%; isotropic −5.2%, −25%, −77%.
-//!   Plain hierarchical radiosity on the same scene is −3.6% at ρ = 0.9 (its visibility fractions), so part of
-//!   the defect is visibility, not clustering.
+//!   links are: their per-leaf gather sums to one), so a defect δ in a row sum of the discrete operator
+//!   becomes δρ/(1 − ρ) in B. Measured on `concentric-spheres?faces=600` with `row_normalisation = "off"`
+//!   (the `row_sums` example: area-mean row sum − 1, then the area-mean error of B against E/(1 − ρ)):
+//!   α δ = −3.2e-4 to −3.9e-4 (−0.35%, −3.2%, −24% at ρ = 0.9, 0.99, 0.999); directional δ = −4.0e-4 (−0.36%,
+//!   −3.8%, −28%); isotropic δ = −2.3e-2, inner sphere −0.10 (−18%, −70%). Before the normal cones
+//!   directional's receiver took order-2 harmonics of every link, leaking 6–9% of a lobe's peak behind each
+//!   face: δ = +8.7e-4, inner sphere +4.8e-3, rows up to 1.030 (+0.74%, +9.4% at ρ = 0.9, 0.99). In a closed
+//!   scene (found by the enclosure rays) the default `row_normalisation = "closed-scenes"` rescales every leaf's
+//!   row to one, as an enclosure's exact form factors sum (Goral, Torrance, Greenberg & Battaile 1984), and
+//!   the furnace holds within the solver's tolerance for every transfer; the rows' distribution over
+//!   sources keeps the transfer's error. Open scenes keep the transfer's row sums.
 //! - `isotropic` loses energy wherever clusters are flat-ish (a cap of a sphere seen face-on is a quarter of
 //!   its true projected area at each end).
 //! - Occlusion inside a cluster is averaged into one number per link (Sillion & Drettakis 1995) for
-//!   every transfer (`alpha` gives each receiving face its own cosine and distance, not its own visibility).
+//!   every transfer (`alpha` gives each receiving face its own cosine and distance, `directional` its own
+//!   cosine and, to first order, distance; neither its own visibility).
 //!   A mean visibility times a mean source flux could carry light through walls into sealed interiors inside a
 //!   receiving cluster; faces sealed off from every emitter are found once by 16 rays per face
 //!   ([`enclosure`]) and receive nothing.
@@ -53,6 +62,7 @@ mod cluster_node;
 mod cluster_transport;
 pub mod enclosure;
 pub mod loose_octree;
+pub mod normal_cone;
 mod params;
 mod solver;
 pub mod spherical_harmonics;
@@ -64,8 +74,8 @@ pub use cluster_link::{box_distance, cluster_link};
 pub use cluster_node::{ClusterNode, ClusterRef};
 pub use cluster_transport::{ClusterTransport, TransferMode};
 pub use loose_octree::{Cluster, ClusterTree, OctreeItem};
-pub use params::{Transfer, VolumeClusterParams};
+pub use params::{RowNormalisation, Transfer, VolumeClusterParams};
 pub use solver::{ClusterSolver, VolumeClusterSolver};
 pub use transfer_alpha::Alpha;
-pub use transfer_directional::{Directional, DirectionalCoefficient, DirectionalIrradiance};
+pub use transfer_directional::{Directional, DirectionalExitance, HarmonicSource};
 pub use transfer_isotropic::Isotropic;

@@ -13,6 +13,8 @@
 use glam::DVec3;
 use radlab_scene::{FaceId, Rgb, Scene};
 
+use crate::normal_cone::NormalCone;
+
 /// One cluster.
 #[derive(Clone, Debug)]
 pub struct Cluster {
@@ -36,6 +38,8 @@ pub struct Cluster {
     pub end: u32,
     /// Number of direct face children.
     pub direct: u32,
+    /// The cone of its faces' normals ([`NormalCone::UNKNOWN`] for items that are not faces).
+    pub cone: NormalCone,
 }
 
 /// The hierarchy: clusters (the root is 0) and the face permutation.
@@ -83,7 +87,8 @@ impl ClusterTree {
         Self::build_over(scene, (0..scene.face_count()).collect())
     }
 
-    /// Builds the loose octree over the given faces of `scene` (at least one).
+    /// Builds the loose octree over the given faces of `scene` (at least one), with every cluster's normal
+    /// cone.
     pub fn build_over(scene: &Scene, all: Vec<FaceId>) -> Self {
         let items: Vec<OctreeItem> = (0..scene.face_count())
             .map(|f| {
@@ -99,7 +104,17 @@ impl ClusterTree {
                 }
             })
             .collect();
-        Self::build_over_items(&items, all)
+        let mut tree = Self::build_over_items(&items, all);
+        for i in 0..tree.clusters.len() {
+            let faces = tree.faces(i as u32);
+            let cone = NormalCone::of(
+                faces
+                    .iter()
+                    .map(|&f| (scene.faces[f].area, scene.faces[f].normal)),
+            );
+            tree.clusters[i].cone = cone;
+        }
+        tree
     }
 
     /// Builds the loose octree over `all` (at least one index into `items`): the same tree as
@@ -143,6 +158,7 @@ impl ClusterTree {
             start,
             end: start,
             direct: 0,
+            cone: NormalCone::UNKNOWN,
         });
         let (direct, groups) = partition(items, faces, lo, hi);
         self.clusters[id as usize].direct = direct.len() as u32;

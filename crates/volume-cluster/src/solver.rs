@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use radlab_hierarchical::{Engine, PatchKernel, SurfaceOutput};
+use radlab_hierarchical::{Engine, NodeKind, PatchKernel, SurfaceOutput};
 use radlab_scene::{
     Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
 };
@@ -15,7 +15,7 @@ use radlab_scene::{
 use crate::cluster_node::ClusterNode;
 use crate::cluster_transport::{ClusterTransport, TransferMode};
 use crate::loose_octree::ClusterTree;
-use crate::params::{Transfer, VolumeClusterParams};
+use crate::params::{RowNormalisation, Transfer, VolumeClusterParams};
 use crate::transfer_alpha::Alpha;
 use crate::transfer_directional::Directional;
 use crate::transfer_isotropic::Isotropic;
@@ -69,14 +69,17 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         let min_size = p.resolve_min_size(scene)?;
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
         let before = accel.rays_cast();
-        let reachable = crate::enclosure::reachable_faces(scene, accel, seed);
+        let enclosures = crate::enclosure::enclosures(scene, accel, seed);
         let transport = ClusterTransport::new(patches, accel, p.visibility, p.quadrature, seed)
-            .with_reachable(reachable);
+            .with_reachable(enclosures.reachable);
         let output = SurfaceOutput::new(p.reconstruction, seed);
         let n_roots = roots.len() as u32;
         let mut engine = Engine::new(roots, transport, p, min_size)?;
         engine.expand(|n| matches!(n, ClusterNode::Cluster(_)))?;
         engine.skip_initial_links();
+        engine.normalise_closed_rows(
+            enclosures.closed && params.row_normalisation == RowNormalisation::ClosedScenes,
+        );
         for &(r, s) in first_links {
             if r >= n_roots || s >= n_roots {
                 return Err(SolveError::param(
@@ -120,6 +123,22 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
                     self.scene.faces[f].area,
                     self.engine.radiosity()[i as usize],
                 ))
+            })
+            .collect()
+    }
+
+    /// Row sums of the discrete operator in use at every leaf, (face, leaf area, Σ_s K_ls per channel)
+    /// (radlab-hierarchical's `Engine::row_sums`): one at every leaf of a closed scene if the transfer were
+    /// exact, or where the row normalisation is on; a defect δ becomes δρ/(1 − ρ) in the furnace
+    /// B = E/(1 − ρ). Leaves of zero reflectance, or sealed off from every emitter, read zero.
+    pub fn row_sums(&self) -> Vec<(FaceId, f64, Rgb)> {
+        let e = &self.engine;
+        let r = e.row_sums();
+        (0..e.nodes().len() as u32)
+            .filter(|&i| e.is_leaf(i))
+            .filter_map(|i| {
+                let node = &e.nodes()[i as usize];
+                Some((node.face()?, node.area(), r[i as usize]))
             })
             .collect()
     }

@@ -5,6 +5,13 @@
 //! centroid to the face's; V the link's visibility), evaluated once per (face, link) and cached; faces sealed
 //! off from every emitter get nothing ([`crate::enclosure`]). O(faces) per link and no rays below the link:
 //! O(k log k + n) overall, and every input face below a cluster link is touched at every pass.
+//!
+//! The directional transfer's receiver (normal cones and a first-order irradiance field, [`crate::normal_cone`])
+//! would make the receiver side O(1) per link: measured on the concentric spheres at k = 1e4 it evaluates
+//! 23.6 million (face, link) pairs instead of 190 million, but a face then takes the link's field to second
+//! order in the cluster's size over the distance (3.3% off on a plate of 200 faces under a light at R/r =
+//! 0.14), where this transfer is exact per face; gathered at the cluster only below R/r = 0.07 (within 1%) it
+//! saved nothing up to k = 1e4 and its larger row entries tripled the memory. So α stays face by face.
 
 use glam::DVec3;
 use radlab_hierarchical::{GatherAt, NodeKind, NodeView};

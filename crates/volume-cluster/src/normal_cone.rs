@@ -1,0 +1,290 @@
+//! Normal cones of clusters and the oriented receiver they make exact and cheap. A cluster's normal cone is
+//! the smallest cone about the area-weighted mean normal a = Σ A_i n_i/|Σ A_i n_i| holding every face
+//! normal, half-angle θ = max_i ∠(a, n_i) (Shirman & Abi-Ezzi 1993's cone of normals, here an exact bound
+//! over the cluster's faces). For a unit direction u at angle φ from a:
+//!
+//! - φ + θ ≤ π/2: every face has n_i·u ≥ 0, so Σ_i A_i B_i max(0, n_i·u) = P·u with the power vector
+//!   P = Σ_i A_i B_i n_i (exact: a cluster source facing u is a vector source);
+//! - φ − θ ≥ π/2: every face has n_i·u ≤ 0, and nothing is exchanged in direction u;
+//! - otherwise the cone straddles the plane normal to u, and the faces must be taken one by one.
+//!
+//! On the receiver side the same test on the arrival direction u = −d (d from the source's centroid to the
+//! receiver's) decides how a link to a cluster is gathered. Links that every face faces add their irradiance
+//! field E(x) = V J (s − x)/(π |s − x|³) (s the source's centroid) to the cluster's, kept as its value and
+//! gradient at the cluster's centroid c, E(c) = V J u/(π r²) and ∇E(c) = V J (3 u uᵀ − I)/(π r³), moved to
+//! each child's centroid at push, E(c') = E(c) + ∇E (c' − c); a face of normal n at x takes n·E(x): the sum
+//! over such links of V J max(0, n·u_x)/(π r_x²) with no term clamped (Sillion 1995's oriented clusters with
+//! the irradiance-vector push of Willmott, Heckbert & Garland 1999), to second order in the cluster's size
+//! over r, where the face-by-face gather it replaces evaluated each face's own distance and direction. Links
+//! behind every face carry nothing; only straddling links are evaluated face by face (Smits, Arvo & Greenberg
+//! 1994's α gather). A flat or gently curved cluster straddles only links near its own plane.
+
+use std::f64::consts::FRAC_PI_2;
+
+use std::fmt::Debug;
+
+use glam::{DMat3, DVec3};
+use radlab_hierarchical::{GatherAt, LinearState, NodeKind, NodeView};
+use radlab_scene::Rgb;
+
+use crate::cluster_node::ClusterNode;
+use crate::cluster_transport::{TransferMode, reflect_node};
+
+/// The cone of a cluster's face normals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalCone {
+    /// Unit axis (the area-weighted mean normal).
+    pub axis: DVec3,
+    /// Half-angle in radians: π when nothing is known (every direction straddles).
+    pub half_angle: f64,
+}
+
+/// Where a direction lies relative to a cone's faces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    /// Every face has n·u ≥ 0.
+    Front,
+    /// Every face has n·u ≤ 0.
+    Back,
+    /// Some faces each way.
+    Straddle,
+}
+
+impl NormalCone {
+    /// A cone that knows nothing: every direction straddles.
+    pub const UNKNOWN: Self = Self {
+        axis: DVec3::Z,
+        half_angle: std::f64::consts::PI,
+    };
+
+    /// The cone of unit normals `n` weighted by areas `a`.
+    pub fn of(normals: impl Iterator<Item = (f64, DVec3)> + Clone) -> Self {
+        let sum: DVec3 = normals.clone().map(|(a, n)| a * n).sum();
+        let total: f64 = normals.clone().map(|(a, _)| a).sum();
+        if !(sum.length() > 1e-9 * total) {
+            return Self::UNKNOWN;
+        }
+        let axis = sum.normalize();
+        let half_angle = normals.map(|(_, n)| angle(axis, n)).fold(0.0, f64::max);
+        Self { axis, half_angle }
+    }
+
+    /// The side of unit direction `u`.
+    pub fn side(&self, u: DVec3) -> Side {
+        let phi = angle(self.axis, u);
+        if phi + self.half_angle <= FRAC_PI_2 {
+            Side::Front
+        } else if phi - self.half_angle >= FRAC_PI_2 {
+            Side::Back
+        } else {
+            Side::Straddle
+        }
+    }
+}
+
+/// The angle between two unit vectors, robust near 0 and π.
+fn angle(a: DVec3, b: DVec3) -> f64 {
+    a.cross(b).length().atan2(a.dot(b))
+}
+
+/// The cone of a node: a patch's is its normal (half-angle 0), a cluster's from the tree.
+pub fn cone_of(node: &ClusterNode<'_>) -> NormalCone {
+    match node {
+        ClusterNode::Patch(p) => NormalCone {
+            axis: p.normal,
+            half_angle: 0.0,
+        },
+        ClusterNode::Cluster(c) => c.data().cone,
+    }
+}
+
+/// Per channel, the power vector Σ A B n of a patch of radiosity `b`.
+pub fn power_vector(leaf: &ClusterNode<'_>, b: Rgb) -> [DVec3; 3] {
+    match leaf.normal() {
+        Some(n) => std::array::from_fn(|k| leaf.area() * b[k] * n),
+        None => [DVec3::ZERO; 3],
+    }
+}
+
+/// P·d per channel.
+pub fn dot3(p: &[DVec3; 3], d: DVec3) -> Rgb {
+    Rgb::new(p[0].dot(d), p[1].dot(d), p[2].dot(d))
+}
+
+/// Irradiance of a node under the oriented receiver: scalar at patches; at clusters, per channel, the
+/// irradiance field of the links every face below faces, to first order about the cluster's centroid c.
+#[derive(Clone, Copy, Debug)]
+pub struct OrientedIrradiance {
+    /// Irradiance of a patch.
+    pub scalar: Rgb,
+    /// Per channel, E(c) = Σ V J u/(π r²) (clusters).
+    pub vector: [DVec3; 3],
+    /// Per channel, its gradient ∇E(c) = Σ V J (3 u uᵀ − I)/(π r³) (symmetric).
+    pub gradient: [DMat3; 3],
+}
+
+impl Default for OrientedIrradiance {
+    /// Zero (glam's `DMat3::default()` is the identity, not zero).
+    fn default() -> Self {
+        Self {
+            scalar: Rgb::ZERO,
+            vector: [DVec3::ZERO; 3],
+            gradient: [DMat3::ZERO; 3],
+        }
+    }
+}
+
+impl LinearState for OrientedIrradiance {
+    fn add_scaled(&mut self, c: Rgb, x: &Self) {
+        self.scalar += c * x.scalar;
+        self.vector.add_scaled(c, &x.vector);
+        for k in 0..3 {
+            self.gradient[k] += c[k] * x.gradient[k];
+        }
+    }
+}
+
+/// A coefficient of the oriented receiver: scalar at a patch, a vector at a cluster.
+#[derive(Clone, Copy, Debug)]
+pub enum OrientedCoefficient {
+    /// Irradiance per unit flux at a patch.
+    Scalar(f64),
+    /// At a cluster that faces u with every face, the field e = V u/(π r²) and 1/r, from which deliver
+    /// forms the gradient V (3 u uᵀ − I)/(π r³) = (3 e eᵀ/|e| − |e| I)/r (zero if every face faces away;
+    /// 32 bytes rather than the 96 of a vector and a matrix, in every cached row entry).
+    Field(DVec3, f64),
+}
+
+/// Where a link from `src` to cluster `recv` is gathered: at the cluster if every face below faces the
+/// source's centroid or every face faces away; else at each face. At any distance: the first-order field's
+/// error at a face is second order in R/r (the cluster's bounding radius over the distance), about
+/// 2 (R/r)² of its value (a plate facing a source square on: (1 + δ²/r²)^(−2) ≈ 1 − 2δ²/r², the
+/// first-order term vanishing; measured 3.3% at R/r = 0.14), and cancels to first order on the mean over
+/// the cluster. (Gathered at the cluster only below R/r = 0.07, within 1% of a face-by-face gather, no link
+/// qualified on the concentric spheres up to k = 1e4.)
+fn oriented_gather_at(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
+    let u = (src.centroid() - recv.centroid()).normalize_or_zero();
+    match cone_of(recv).side(u) {
+        Side::Straddle => GatherAt::Faces,
+        Side::Front | Side::Back => GatherAt::Receiver,
+    }
+}
+
+/// The source half of an oriented transfer: what a cluster sends toward d, from its exitance state. The
+/// receiver half, the normal cones', is [`Oriented`]'s.
+pub trait OrientedSource: Sync + Send + Debug + Default {
+    /// What a node sends besides its radiosity, summed from children to parent.
+    type Exitance: LinearState;
+    /// J_S(d) = Σ_i A_i B_i max(0, n_i·d) of cluster `src`, or the transfer's estimate of it.
+    fn cluster_flux(
+        view: &NodeView<'_, ClusterNode<'_>>,
+        b: &[Rgb],
+        x: &[Self::Exitance],
+        src: u32,
+        d: DVec3,
+    ) -> Rgb;
+    /// The exitance of a leaf patch of radiosity `b`.
+    fn exitance(leaf: &ClusterNode<'_>, b: Rgb) -> Self::Exitance;
+}
+
+/// An oriented transfer: source `S`, the normal cones' receiver.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Oriented<S>(pub S);
+
+impl<S: OrientedSource> TransferMode for Oriented<S> {
+    type Irradiance = OrientedIrradiance;
+    type Exitance = S::Exitance;
+    type Coefficient = OrientedCoefficient;
+
+    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
+        oriented_gather_at(recv, src)
+    }
+
+    fn scalar(c: f64) -> OrientedCoefficient {
+        OrientedCoefficient::Scalar(c)
+    }
+
+    /// The irradiance field of a point source, V (s − x)/(π |s − x|³), at the cluster's centroid, with its
+    /// gradient formed at deliver.
+    fn at_cluster(target: &ClusterNode<'_>, g: f64, d: DVec3, r: f64) -> OrientedCoefficient {
+        let u = -d;
+        match cone_of(target).side(u) {
+            Side::Front if r > 0.0 => OrientedCoefficient::Field(g * u, 1.0 / r),
+            _ => OrientedCoefficient::Field(DVec3::ZERO, 0.0),
+        }
+    }
+
+    fn cluster_flux(
+        view: &NodeView<'_, ClusterNode<'_>>,
+        b: &[Rgb],
+        x: &[S::Exitance],
+        src: u32,
+        d: DVec3,
+    ) -> Rgb {
+        S::cluster_flux(view, b, x, src, d)
+    }
+
+    fn deliver(h: &mut OrientedIrradiance, c: &OrientedCoefficient, flux: Rgb) {
+        match c {
+            OrientedCoefficient::Scalar(s) => h.scalar += *s * flux,
+            OrientedCoefficient::Field(e, inv_r) => {
+                let g = e.length();
+                if g > 0.0 {
+                    let t = *inv_r
+                        * (3.0 / g * DMat3::from_cols(e.x * *e, e.y * *e, e.z * *e)
+                            - g * DMat3::IDENTITY);
+                    for k in 0..3 {
+                        h.vector[k] += flux[k] * *e;
+                        h.gradient[k] += flux[k] * t;
+                    }
+                }
+            }
+        }
+    }
+
+    /// A cluster's field moved to the child's centroid, E(c') = E(c) + ∇E (c' − c), to a child cluster;
+    /// n·E(x) at a patch's centroid x (the mean over the patch of a linear field) to a patch, unclamped so
+    /// that the operator stays linear (a clamp stalls the solver's convergence test; n·E is a first-order
+    /// expansion of a sum of non-negative terms, negative only where the expansion is off by more than its
+    /// value); a patch's scalar to its pieces.
+    fn push(
+        parent: &ClusterNode<'_>,
+        child: &ClusterNode<'_>,
+        h: &OrientedIrradiance,
+    ) -> OrientedIrradiance {
+        let ClusterNode::Cluster(_) = parent else {
+            return *h;
+        };
+        let dx = child.centroid() - parent.centroid();
+        let field: [DVec3; 3] = std::array::from_fn(|k| h.vector[k] + h.gradient[k] * dx);
+        match child.normal() {
+            Some(n) => OrientedIrradiance {
+                scalar: h.scalar + dot3(&field, n),
+                ..OrientedIrradiance::default()
+            },
+            None => OrientedIrradiance {
+                scalar: h.scalar,
+                vector: field,
+                gradient: h.gradient,
+            },
+        }
+    }
+
+    fn reflect(
+        leaf: &ClusterNode<'_>,
+        h: &OrientedIrradiance,
+        with_emission: bool,
+    ) -> (Rgb, S::Exitance) {
+        let b = reflect_node(leaf, h.scalar, with_emission);
+        (b, S::exitance(leaf, b))
+    }
+
+    fn uniform(leaf: &ClusterNode<'_>) -> (Rgb, S::Exitance) {
+        let b = leaf.reflectance();
+        (b, S::exitance(leaf, b))
+    }
+
+    fn unit(leaf: &ClusterNode<'_>) -> S::Exitance {
+        S::exitance(leaf, Rgb::ONE)
+    }
+}
