@@ -14,7 +14,7 @@
 //! | name | default | meaning |
 //! |---|---|---|
 //! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (per-face cosines), `directional` (normal cones; spherical harmonics where a source straddles) |
-//! | `row_normalisation` | `closed-scenes` | in a closed scene, rescale each leaf's row of the operator to sum to one; `off` |
+//! | `row_normalisation` | `off` | `closed-scenes`: in a closed scene, rescale each leaf's row of the operator to sum to one |
 //! | every parameter of `hierarchical` but `lazy_linking` | as there | ε, oracle, schedule, α, stages, minimum element, visibility rays per link (also for cluster links), quadrature, tolerance, gather (patch links), interpolation, memory budget |
 //!
 //! ## Transfers, side by side
@@ -44,10 +44,11 @@
 //!   −3.8%, −28%); isotropic δ = −2.3e-2, inner sphere −0.10 (−18%, −70%). Before the normal cones
 //!   directional's receiver took order-2 harmonics of every link, leaking 6–9% of a lobe's peak behind each
 //!   face: δ = +8.7e-4, inner sphere +4.8e-3, rows up to 1.030 (+0.74%, +9.4% at ρ = 0.9, 0.99). In a closed
-//!   scene (found by the enclosure rays) the default `row_normalisation = "closed-scenes"` rescales every leaf's
+//!   scene (found by the enclosure rays) the option `row_normalisation = "closed-scenes"` rescales every leaf's
 //!   row to one, as an enclosure's exact form factors sum (Goral, Torrance, Greenberg & Battaile 1984), and
-//!   the furnace holds within the solver's tolerance for every transfer; the rows' distribution over
-//!   sources keeps the transfer's error. Open scenes keep the transfer's row sums.
+//!   the furnace then holds within the solver's tolerance for every transfer, by construction; the rows'
+//!   distribution over sources keeps the transfer's error. It is off by default, so that closed furnaces keep
+//!   measuring the transfers. Open scenes keep the transfer's row sums either way.
 //! - `isotropic` loses energy wherever clusters are flat-ish (a cap of a sphere seen face-on is a quarter of
 //!   its true projected area at each end).
 //! - Occlusion inside a cluster is averaged into one number per link (Sillion & Drettakis 1995) for

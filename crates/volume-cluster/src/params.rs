@@ -33,10 +33,11 @@ pub enum RowNormalisation {
     /// exact form factors of an enclosure do (Goral et al. 1984). Cluster links' point approximations leave
     /// row defects of about 1e-3 (α, directional) to 1e-1 (isotropic, inner faces of the concentric
     /// spheres), which the furnace B = E/(1 − ρ) multiplies by ρ/(1 − ρ): 1000 at ρ = 0.999. Open scenes
-    /// are left alone. The default.
-    #[default]
+    /// are left alone. Not the default: with it a closed furnace holds by construction, whatever the
+    /// transfer, so the furnace would no longer test the transfer.
     ClosedScenes,
-    /// Never: the rows are what the transfer computes.
+    /// Never: the rows are what the transfer computes. The default.
+    #[default]
     Off,
 }
 
@@ -45,7 +46,7 @@ pub enum RowNormalisation {
 pub struct VolumeClusterParams {
     /// Cluster transfer. Default [`Transfer::Alpha`].
     pub transfer: Transfer,
-    /// Row normalisation. Default [`RowNormalisation::ClosedScenes`].
+    /// Row normalisation. Default [`RowNormalisation::Off`].
     pub row_normalisation: RowNormalisation,
     /// The hierarchical engine's parameters (ε, oracle, schedule, visibility, gather, interpolation, …).
     #[serde(flatten)]
@@ -81,8 +82,9 @@ impl MethodParams for VolumeClusterParams {
         )];
         d.push((
             "row_normalisation",
-            "closed-scenes (default: where every enclosure ray hits the front of a face, each leaf's rows are \
-             rescaled to sum to one, as an enclosure's form factors do) | off",
+            "off (default: the rows are what the transfer computes) | closed-scenes (where every enclosure ray \
+             hits the front of a face, each leaf's row is rescaled to sum to one, as an enclosure's form factors \
+             do; a closed furnace then holds by construction)",
         ));
         d.extend(
             HierarchicalParams::docs()
