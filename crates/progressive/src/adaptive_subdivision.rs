@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use crate::element_location::ElementLocator;
 use crate::shooting::{Kernel, Work, element_patch_factor};
-use crate::substructuring::{BYTES_PER_ELEMENT, Element, LEAF, Mesh};
+use crate::substructuring::{BYTES_PER_ELEMENT, Element, Mesh};
 
 /// Where along an edge the neighbour probes go.
 const PROBE_AT: [f64; 2] = [0.25, 0.75];
@@ -110,28 +110,6 @@ fn update_pairs(
     kept
 }
 
-/// Splits the leaves `marked` (sorted) into four children each, appended in the order of their parents, and
-/// updates the leaf list (ascending); returns the index of the first child. Radiosities are the parents'.
-fn split_leaves(mesh: &mut Mesh, marked: &[u32]) -> usize {
-    let first_new = mesh.elements.len();
-    for &e in marked {
-        let parent = mesh.elements[e as usize];
-        mesh.elements[e as usize].first_child = mesh.elements.len() as u32;
-        for polygon in parent.polygon.split4() {
-            mesh.elements.push(Element {
-                polygon,
-                area: polygon.area(),
-                first_child: LEAF,
-                ..parent
-            });
-        }
-    }
-    mesh.leaves.retain(|&e| mesh.elements[e as usize].is_leaf());
-    mesh.leaves
-        .extend(first_new as u32..mesh.elements.len() as u32);
-    first_new
-}
-
 /// Settings of a refinement pass.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Refinement {
@@ -190,7 +168,7 @@ pub(crate) fn refine(
                 "raise min_element_size, adaptive_threshold or memory_budget_mib, or set adaptive = false",
             ));
         }
-        let first_new = split_leaves(mesh, &marked);
+        let first_new = mesh.split_leaves(&marked);
         // Re-gather: B_c = E + ρ Σ_j F_cj S_j over the patches shot so far, in shot order.
         let elements = &mesh.elements;
         let patches = &mesh.patches;
@@ -286,7 +264,7 @@ mod tests {
                 })
                 .collect();
             assert!(!marked.is_empty());
-            let first_new = split_leaves(&mut mesh, &marked);
+            let first_new = mesh.split_leaves(&marked);
             pairs = update_pairs(&scene, &mesh, &loc, &pairs, &marked, first_new as u32);
             let fresh = neighbour_pairs(&scene, &mesh, &loc);
             let differ: Vec<_> = fresh

@@ -34,7 +34,6 @@ impl ElementTree for Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::substructuring::{Element, LEAF};
 
     #[test]
     fn every_leaf_is_found_from_its_own_points() {
@@ -48,17 +47,7 @@ mod tests {
                     mesh.leaves_below(e, &mut l);
                     l[l.len() / 2]
                 };
-                let parent = mesh.elements[target as usize];
-                let first = mesh.elements.len() as u32;
-                for polygon in parent.polygon.split4() {
-                    mesh.elements.push(Element {
-                        polygon,
-                        area: polygon.area(),
-                        first_child: LEAF,
-                        ..parent
-                    });
-                }
-                mesh.elements[target as usize].first_child = first;
+                mesh.split_leaves(&[target]);
             }
         }
         let loc = ElementLocator::new(&scene, &mesh);

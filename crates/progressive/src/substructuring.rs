@@ -202,6 +202,30 @@ impl Mesh {
         sum / patch.area
     }
 
+    /// Splits the leaves `marked` (ascending) into four children each ([`Polygon::split4`]), appended in the
+    /// order of their parents with the parents' radiosity, and updates the leaf list (ascending); returns the
+    /// index of the first child.
+    pub(crate) fn split_leaves(&mut self, marked: &[u32]) -> usize {
+        let first_new = self.elements.len();
+        for &e in marked {
+            let parent = self.elements[e as usize];
+            self.elements[e as usize].first_child = self.elements.len() as u32;
+            for polygon in parent.polygon.split4() {
+                self.elements.push(Element {
+                    polygon,
+                    area: polygon.area(),
+                    first_child: LEAF,
+                    ..parent
+                });
+            }
+        }
+        let elements = &self.elements;
+        self.leaves.retain(|&e| elements[e as usize].is_leaf());
+        self.leaves
+            .extend(first_new as u32..self.elements.len() as u32);
+        first_new
+    }
+
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.patches.capacity() * size_of::<Patch>()
