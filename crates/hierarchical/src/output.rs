@@ -133,6 +133,7 @@ fn leaf_elements<N: NodeKind, T: Transport<N>>(engine: &Engine<N, T>) -> Vec<Ele
                 face: p.face,
                 polygon: p.polygon,
                 radiosity: engine.radiosity()[i as usize],
+                open: 1.0,
             })
         })
         .collect()

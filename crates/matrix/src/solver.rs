@@ -1,12 +1,20 @@
 //! The matrix radiosity solver driven step by step: assembly of the form-factor matrix in blocks of rows
 //! ([`crate::assembly`]), then one iteration of the chosen method per step until the stopping rule of
 //! [`crate::linear_system`] is met. The solution is constant per element: B_i at every point of element i.
+//!
+//! Before assembly, each element's open fraction o_i ([`radlab_scene::open_fraction`]) is estimated (with
+//! area-sampled visibility, the default; with `centre` or `unoccluded` visibility o_i = 1), and the
+//! system is solved on the effective areas A_i max(o_i, r_i) (r_i the assembled row sum Σ_j F'_ij): B_i is
+//! the radiosity of the element's open part, so an element straddling a contact (half under a floor covering)
+//! no longer sends half of its light into the covering's back. Where nothing is sealed, o_i = 1 and the
+//! system is the plain one.
 
 use glam::DVec3;
 use radlab_scene::{
     Accel, ElementMesh, FaceId, MethodParams, Reconstructor, Rgb, Scene, Solution, SolveError,
-    Solver, Stats, Step, default_element_size,
+    Solver, Stats, Step, default_element_size, gouraud::ElementValue, open_fraction::open_fraction,
 };
+use rayon::prelude::*;
 
 use crate::assembly::{self, Assembly, PairSettings};
 use crate::conjugate_gradient::ConjugateGradient;
@@ -15,6 +23,7 @@ use crate::{Iteration, MatrixParams, gauss_seidel, jacobi};
 
 #[derive(Clone, Copy)]
 enum Phase {
+    OpenFractions,
     Assembling,
     Solving,
     Done,
@@ -30,6 +39,12 @@ pub struct MatrixSolver<'a> {
     seed: u64,
     mesh: ElementMesh,
     area: Vec<f64>,
+    /// Open fraction o_i of each element (empty until the first step).
+    open: Vec<f64>,
+    /// Effective area A_i max(o_i, r_i) the system is solved on (the true areas until assembly ends).
+    open_area: Vec<f64>,
+    /// Rays cast estimating the open fractions.
+    open_rays: u64,
     rho: Vec<Rgb>,
     emission: Vec<Rgb>,
     assembly: Assembly,
@@ -134,13 +149,16 @@ impl<'a> MatrixSolver<'a> {
             mesh,
             radiosity: emission.clone(),
             scratch: Vec::with_capacity(n),
+            open: Vec::new(),
+            open_area: area.clone(),
+            open_rays: 0,
             area,
             rho,
             emission,
             assembly,
             cg: None,
             rule,
-            phase: Phase::Assembling,
+            phase: Phase::OpenFractions,
             steps: 0,
             iterations: 0,
             residual: None,
@@ -203,7 +221,9 @@ impl<'a> MatrixSolver<'a> {
         self.iterations = 0;
         self.residual = None;
         self.hit_cap = false;
-        self.phase = if self.assembly.is_finished() {
+        self.phase = if self.open.is_empty() {
+            Phase::OpenFractions
+        } else if self.assembly.is_finished() {
             Phase::Solving
         } else {
             Phase::Assembling
@@ -220,7 +240,20 @@ impl<'a> MatrixSolver<'a> {
         self.assembly.matrix[i * n + j] / self.area[i]
     }
 
-    /// Irradiance per element, H_i = Σ_j F'_ij B_j, from the current radiosity.
+    /// The effective areas the system is solved on, A_i max(o_i, r_i) (the module documentation); the true
+    /// areas before assembly ends.
+    pub fn open_areas(&self) -> &[f64] {
+        &self.open_area
+    }
+
+    /// The open fractions o_i of the elements (empty before the first step; all 1 unless visibility is
+    /// area-sampled).
+    pub fn open_fractions(&self) -> &[f64] {
+        &self.open
+    }
+
+    /// Irradiance per element over its open part, H_i = Σ_j G_ij B_j / (A_i max(o_i, r_i)), from the current
+    /// radiosity (Σ_j F'_ij B_j where nothing is sealed).
     pub fn irradiance(&self) -> Vec<Rgb> {
         let sys = self.system();
         (0..sys.n)
@@ -232,7 +265,7 @@ impl<'a> MatrixSolver<'a> {
         System {
             n: self.mesh.len(),
             g: &self.assembly.matrix,
-            area: &self.area,
+            area: &self.open_area,
             rho: &self.rho,
             emission: &self.emission,
         }
@@ -242,7 +275,7 @@ impl<'a> MatrixSolver<'a> {
         let sys = System {
             n: self.mesh.len(),
             g: &self.assembly.matrix,
-            area: &self.area,
+            area: &self.open_area,
             rho: &self.rho,
             emission: &self.emission,
         };
@@ -285,6 +318,30 @@ impl<'a> MatrixSolver<'a> {
         Ok(Step::Continue)
     }
 
+    /// A_i max(o_i, r_i): an element's row sum r_i bounds what its open part can be (it cannot receive
+    /// from more than its open area), which keeps ρ_i r_i / max(o_i, r_i) ≤ ρ_i, the contraction the stopping
+    /// rule relies on.
+    fn effective_areas(&self) -> Vec<f64> {
+        let n = self.mesh.len();
+        (0..n)
+            .map(|i| {
+                let a = self.area[i];
+                let row: f64 = self.assembly.matrix[i * n..(i + 1) * n].iter().sum::<f64>() / a;
+                let o = self.open.get(i).copied().unwrap_or(1.0);
+                a * o.max(row).min(1.0)
+            })
+            .collect()
+    }
+
+    /// The elements' values for Gouraud vertices and final gathers, each with its effective open share.
+    fn element_values(&self) -> Vec<ElementValue> {
+        let mut v = self.mesh.values(&self.radiosity);
+        for ((x, &a), &oa) in v.iter_mut().zip(&self.area).zip(&self.open_area) {
+            x.open = (oa / a).min(1.0);
+        }
+        v
+    }
+
     fn finish(&mut self) {
         self.phase = Phase::Done;
         self.cg = None;
@@ -295,6 +352,37 @@ impl<'a> MatrixSolver<'a> {
 impl Solver for MatrixSolver<'_> {
     fn step(&mut self) -> Result<Step, SolveError> {
         match self.phase {
+            Phase::OpenFractions => {
+                self.steps += 1;
+                let (scene, accel, seed) = (self.scene, self.accel, self.seed);
+                // Only area-sampled visibility carries an element's sealed share into its form factors;
+                // with one centre ray or none, each element is open or closed as a whole.
+                let sampled = self.params.visibility.is_area_sampled();
+                let found: Vec<(f64, u64)> = self
+                    .mesh
+                    .elements
+                    .par_iter()
+                    .enumerate()
+                    .map(|(i, e)| {
+                        if sampled {
+                            open_fraction(
+                                scene,
+                                accel,
+                                &e.polygon,
+                                e.face as FaceId,
+                                seed,
+                                i as u64,
+                            )
+                        } else {
+                            (1.0, 0)
+                        }
+                    })
+                    .collect();
+                self.open_rays = found.iter().map(|f| f.1).sum();
+                self.open = found.into_iter().map(|f| f.0).collect();
+                self.phase = Phase::Assembling;
+                Ok(Step::Continue)
+            }
             Phase::Assembling => {
                 self.steps += 1;
                 let settings = PairSettings {
@@ -303,6 +391,7 @@ impl Solver for MatrixSolver<'_> {
                     seed: self.seed,
                 };
                 if self.assembly.step(&self.mesh, self.accel, &settings) {
+                    self.open_area = self.effective_areas();
                     self.phase = Phase::Solving;
                 }
                 Ok(Step::Continue)
@@ -322,7 +411,7 @@ impl Solver for MatrixSolver<'_> {
 
     fn stats(&self) -> Stats {
         let n = self.mesh.len() as u64;
-        let vectors = self.area.len() * 8
+        let vectors = (self.area.len() + self.open.len() + self.open_area.len()) * 8
             + (self.rho.len()
                 + self.emission.len()
                 + self.radiosity.len()
@@ -338,7 +427,7 @@ impl Solver for MatrixSolver<'_> {
             elements: n,
             links: self.assembly.nonzero,
             form_factors: self.assembly.form_factors,
-            rays: self.assembly.rays,
+            rays: self.assembly.rays + self.open_rays,
             bytes: (self.assembly.matrix.len() * 8 + vectors + self.mesh.bytes()) as u64,
             residual: self.residual,
         }
@@ -360,7 +449,7 @@ impl Solution for MatrixSolver<'_> {
             point,
             || self.radiosity[self.mesh.locate(face, point)],
             || Some(self.mesh.locate(face, point)),
-            || self.mesh.values(&self.radiosity),
+            || self.element_values(),
         )
     }
 }

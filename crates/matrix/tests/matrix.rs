@@ -134,6 +134,63 @@ fn energy_balance_in_open_and_closed_scenes() {
     }
 }
 
+/// Energy balance across a contact: a panel a millimetre above part of the closed box's floor, its edges
+/// crossing elements. Each such element receives only on its open share o, so with the plain constant-element
+/// system it would send (1 − r_i) of its light, r_i its row sum, into the panel's back: the loss L computed
+/// below from the same solution (it must be a visible share of the emitted power, or the scene tests
+/// nothing). Solved on the open areas, what is absorbed matches what is emitted up to the mismatch of the two
+/// estimates of the open share, o_i (16 probe points) and r_i (16 visibility rays per pair), each resolved to
+/// 1/16 of the element: |o − r| ≲ 2/16 where 1 − r is about 1/2 on average, so the imbalance must be at most a
+/// quarter of L.
+#[test]
+fn energy_balance_across_a_contact() {
+    let scene = common::covered_box(Rgb::new(1.0, 2.0, 0.5));
+    let accel = Accel::new(&scene);
+    let s = solve(
+        &scene,
+        &accel,
+        MatrixParams {
+            element_size: Some(0.2),
+            tolerance: 1e-8,
+            ..MatrixParams::default()
+        },
+    );
+    let (h, b, open_area, open) = (
+        s.irradiance(),
+        s.element_radiosity(),
+        s.open_areas(),
+        s.open_fractions(),
+    );
+    let n = b.len();
+    let (mut emitted, mut absorbed, mut plain_loss) = (Rgb::ZERO, Rgb::ZERO, Rgb::ZERO);
+    let mut straddling = 0;
+    for (i, e) in s.mesh().elements.iter().enumerate() {
+        let f = e.face as usize;
+        emitted += open_area[i] * scene.emission(f);
+        absorbed += open_area[i] * (Rgb::ONE - scene.reflectance(f)) * h[i];
+        if open[i] < 1.0 {
+            straddling += 1;
+            let row: f64 = (0..n).map(|j| s.form_factor(i, j)).sum();
+            plain_loss += open[i] * e.area * (1.0 - row).max(0.0) * b[i];
+        }
+    }
+    let imbalance = (emitted - absorbed).abs();
+    println!(
+        "{straddling} straddling elements; emitted {emitted}, absorbed {absorbed}; imbalance {imbalance}, \
+         loss without open shares {plain_loss}"
+    );
+    assert!(straddling >= 8, "{straddling}");
+    // The covered face reflects no red (ρ = (0, 0.6, 0.9)), so its elements have nothing to lose in red: green
+    // and blue carry the contact.
+    for c in 1..3 {
+        assert!(plain_loss[c] >= 5e-3 * emitted[c], "{plain_loss} {emitted}");
+        assert!(
+            imbalance[c] <= 0.25 * plain_loss[c],
+            "{imbalance} {plain_loss}"
+        );
+    }
+}
+
 /// Receiver and emitter meshed into 24 × 24 elements: the area mean of B over the receiver is ρ E F (the
 /// emitter has ρ = 0 and nothing else is in the scene). Howell's values are given to six digits (±2.5e-6
 /// relative); the remaining quadrature error of 2 × 2 points per element is below 2e-6 at this mesh and

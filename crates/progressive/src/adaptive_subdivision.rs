@@ -12,8 +12,10 @@
 //! B_e = E_e + ρ_e Σ_j F_{e→j} S_j,
 //!
 //! S_j the total radiosity patch j has shot — exactly what e would hold had it existed from the start, since
-//! every shot of j adds ρ_e F_{e→j} ΔB_j with the same factor. The parent's patch then corrects its unshot
-//! radiosity by the change of its area-mean radiosity, ΔB_p += Σ_c A_c B_c / A_p − A_e B_e / A_p, keeping
+//! every shot of j adds ρ_e F_{e→j} ΔB_j with the same factor (divided by the child's open share o_c, as
+//! every gain is: [`crate::substructuring`]). The parent's patch then corrects its unshot radiosity by the
+//! change of its mean radiosity, ΔB_p += Σ_c A_c B_c / A_p − A_e B_e / A_p (areas open areas, and the
+//! patch's open area updated when the children's open shares differ from their parent's), keeping
 //! B_p = S_p + ΔB_p. Splitting repeats until no neighbour pair exceeds the threshold or the minimum size is
 //! reached.
 
@@ -119,6 +121,9 @@ pub(crate) struct Refinement {
     pub min_element_size: f64,
     /// Most elements the arena may hold.
     pub max_elements: usize,
+    /// Whether new elements get their own open share ([`radlab_scene::open_fraction`]); otherwise they keep
+    /// their parent's.
+    pub estimate_open: bool,
 }
 
 /// Whether `el` may be split: its children's longest edge would not fall below the minimum size.
@@ -169,7 +174,11 @@ pub(crate) fn refine(
             ));
         }
         let first_new = mesh.split_leaves(&marked);
-        // Re-gather: B_c = E + ρ Σ_j F_cj S_j over the patches shot so far, in shot order.
+        if r.estimate_open {
+            let new = first_new..mesh.elements.len();
+            work.rays += mesh.estimate_open_of(scene, accel, kernel.seed, new);
+        }
+        // Re-gather: B_c = E + ρ Σ_j F_cj S_j / o_c over the patches shot so far, in shot order.
         let elements = &mesh.elements;
         let patches = &mesh.patches;
         let gathered: Vec<(Rgb, Work)> = (first_new..elements.len())
@@ -189,25 +198,34 @@ pub(crate) fn refine(
                         sum += ff * p.shot;
                     }
                 }
-                (scene.emission(f) + rho * sum, w)
+                (scene.emission(f) + rho * sum / el.open, w)
             })
             .collect();
         for (k, (b, w)) in gathered.into_iter().enumerate() {
             mesh.elements[first_new + k].radiosity = b;
             work += w;
         }
-        // Correct each parent's patch by the change of its area-mean radiosity.
+        // Correct each parent's patch by the change of its mean radiosity over the open area, which the
+        // children's own open shares may change too: B_p = S_p + ΔB_p before and after.
         for &e in &marked {
             let parent = mesh.elements[e as usize];
             let c0 = parent.first_child as usize;
-            let after: Rgb = mesh.elements[c0..c0 + 4]
-                .iter()
-                .map(|c| c.area * c.radiosity)
-                .sum();
+            let children = &mesh.elements[c0..c0 + 4];
+            let after: Rgb = children.iter().map(|c| c.open_area() * c.radiosity).sum();
+            let after_area: f64 = children.iter().map(|c| c.open_area()).sum();
             let patch = &mut mesh.patches[parent.patch as usize];
-            let change = (after - parent.area * parent.radiosity) / patch.area;
-            patch.unshot += change;
-            patch.lit |= change != Rgb::ZERO;
+            let d_sum = after - parent.open_area() * parent.radiosity;
+            let d_area = after_area - parent.open_area();
+            let before = patch.unshot;
+            if d_area == 0.0 {
+                patch.unshot += d_sum / patch.open_area;
+            } else {
+                let b = patch.shot + patch.unshot;
+                let area = patch.open_area + d_area;
+                patch.unshot = (b * patch.open_area + d_sum) / area - patch.shot;
+                patch.open_area = area;
+            }
+            patch.lit |= patch.unshot != before;
         }
         split_total += marked.len();
         *pairs = update_pairs(scene, mesh, locator, pairs, &marked, first_new as u32);

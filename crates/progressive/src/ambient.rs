@@ -28,10 +28,10 @@ pub(crate) fn interreflection_factor(scene: &Scene) -> Rgb {
 
 /// The ambient radiosity R · Σ_p A_p ΔB_p / Σ_p A_p.
 pub(crate) fn ambient_radiosity(patches: &[Patch], interreflection: Rgb) -> Rgb {
-    let area: f64 = patches.iter().map(|p| p.area).sum();
+    let area: f64 = patches.iter().map(|p| p.open_area).sum();
     if area.is_nan() || area <= 0.0 {
         return Rgb::ZERO;
     }
-    let unshot: Rgb = patches.iter().map(|p| p.area * p.unshot).sum();
+    let unshot: Rgb = patches.iter().map(|p| p.open_area * p.unshot).sum();
     interreflection * unshot / area
 }

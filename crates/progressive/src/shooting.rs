@@ -5,8 +5,10 @@
 //! A_j |ΔB_j| and distributes it: every receiving element e gathers (Cohen et al. 1988, with the form factor
 //! taken from the receiver's side as in Wallace, Elmquist & Haines 1989)
 //!
-//! ΔB_e = ρ_e ΔB_j F_{e→j},   B_e += ΔB_e,   ΔB_{p(e)} += ΔB_e A_e / A_{p(e)},   then ΔB_j = 0,
+//! ΔB_e = ρ_e ΔB_j F_{e→j} / o_e,   B_e += ΔB_e,   ΔB_{p(e)} += ΔB_e o_e A_e / (o A)_{p(e)},   then ΔB_j = 0,
 //!
+//! (o_e the element's open share and (o A)_p the patch's open area, [`crate::substructuring`]; 1 and A where
+//! nothing is sealed)
 //! where F_{e→j} is the mean over m × m receiver points of the exact unoccluded point-to-polygon factor toward
 //! the shooting patch, times a visibility fraction from rays between the two
 //! ([`radlab_scene::form_factor::polygon_polygon`], the same kernel the matrix method uses). The ray count
@@ -202,8 +204,8 @@ impl Interreflection {
 pub(crate) fn lit_ambient(patches: &[Patch], interreflection: Rgb) -> Rgb {
     let (mut area, mut unshot) = (0.0, Rgb::ZERO);
     for p in patches.iter().filter(|p| p.lit) {
-        area += p.area;
-        unshot += p.area * p.unshot;
+        area += p.open_area;
+        unshot += p.open_area * p.unshot;
     }
     if area > 0.0 {
         interreflection * unshot / area
@@ -232,7 +234,7 @@ pub(crate) fn select_shooter(
     let mut best_power = 0.0;
     for (i, p) in patches.iter().enumerate() {
         let s = amount(scene, p, ambient);
-        let power = p.area * s.abs().dot(weights);
+        let power = p.open_area * s.abs().dot(weights);
         if power > best_power {
             best_power = power;
             best = Some((i, s));
@@ -243,7 +245,7 @@ pub(crate) fn select_shooter(
 
 /// Unshot power per channel, Σ_p A_p |ΔB_p|.
 pub(crate) fn unshot_power(patches: &[Patch]) -> Rgb {
-    patches.iter().map(|p| p.area * p.unshot.abs()).sum()
+    patches.iter().map(|p| p.open_area * p.unshot.abs()).sum()
 }
 
 /// Unshot power as a fraction of emitted power, worst channel (0 when nothing is emitted).
@@ -291,11 +293,13 @@ pub(crate) fn shoot(
         work += w;
         if f > 0.0 {
             let el = &mut mesh.elements[e as usize];
-            let gain = scene.reflectance(el.face as usize) * amount * f;
+            // F was sampled from all of the element, its sealed points included: over its open part the
+            // radiosity gained is ρ F s / o.
+            let gain = scene.reflectance(el.face as usize) * amount * f / el.open;
             el.radiosity += gain;
-            returned += el.area * gain;
+            returned += el.open_area() * gain;
             let patch = &mut mesh.patches[el.patch as usize];
-            patch.unshot += gain * (el.area / patch.area);
+            patch.unshot += gain * (el.open_area() / patch.open_area);
             patch.lit |= gain != Rgb::ZERO;
         }
     }

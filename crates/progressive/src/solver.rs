@@ -45,8 +45,11 @@ pub struct ElementView {
     pub polygon: Polygon,
     /// Area.
     pub area: f64,
-    /// Radiosity (W/m²), without the ambient term.
+    /// Radiosity (W/m²) of its open part, without the ambient term.
     pub radiosity: Rgb,
+    /// Its open share ([`radlab_scene::open_fraction`]; 1 unless estimated): the element's power is
+    /// `open · area · radiosity`.
+    pub open: f64,
 }
 
 /// The current solution: constant radiosity per leaf element, plus the ambient term when it is on.
@@ -91,6 +94,10 @@ pub struct ProgressiveSolver<'a> {
     work: Work,
     stop: Option<StopReason>,
     output: Output,
+    /// Whether the elements' open shares have been estimated (the first step does it).
+    open_estimated: bool,
+    /// Whether adaptive subdivision estimates its new elements' open shares (area-sampled visibility).
+    estimate_children_open: bool,
 }
 
 impl std::fmt::Debug for ProgressiveSolver<'_> {
@@ -157,6 +164,8 @@ impl<'a> ProgressiveSolver<'a> {
             work: Work::default(),
             stop: None,
             output: Output::new(params.reconstruction, seed),
+            open_estimated: false,
+            estimate_children_open: false,
             params,
         };
         s.update_ambient();
@@ -238,6 +247,7 @@ impl<'a> ProgressiveSolver<'a> {
                     polygon: el.polygon,
                     area: el.area,
                     radiosity: el.radiosity,
+                    open: el.open,
                 }
             })
             .collect()
@@ -282,7 +292,7 @@ impl<'a> ProgressiveSolver<'a> {
             self.stop = Some(StopReason::NothingToShoot);
             return false;
         };
-        let sent = patches[j].area * amount;
+        let sent = patches[j].open_area * amount;
         let (w, returned) = shooting::shoot(
             self.scene,
             self.accel,
@@ -310,6 +320,20 @@ impl Solver for ProgressiveSolver<'_> {
         }
         self.output.invalidate();
         self.steps += 1;
+        if !self.open_estimated {
+            // Only where both visibility estimates sample the receiver's area does its sealed share enter
+            // the form factors ([`radlab_scene::open_fraction`]); otherwise every open share stays 1.
+            if self.kernel.visibility.is_area_sampled()
+                && self.kernel.indirect_visibility.is_area_sampled()
+            {
+                self.work.rays +=
+                    self.solution
+                        .mesh
+                        .estimate_open(self.scene, self.accel, self.kernel.seed);
+                self.estimate_children_open = true;
+            }
+            self.open_estimated = true;
+        }
         let mut shot_any = false;
         for _ in 0..self.params.shots_per_step {
             if !self.shoot_once() {
@@ -330,6 +354,7 @@ impl Solver for ProgressiveSolver<'_> {
                     threshold: self.params.adaptive_threshold,
                     min_element_size: self.lengths.min_element_size,
                     max_elements: self.max_elements,
+                    estimate_open: self.estimate_children_open,
                 },
             )?;
             self.elements_split += split as u64;
@@ -438,12 +463,17 @@ impl Solution for ProgressiveSolver<'_> {
                     .map(|k| k as usize)
             },
             || {
-                self.elements()
-                    .into_iter()
-                    .map(|e| ElementValue {
-                        face: e.face,
-                        polygon: e.polygon,
-                        radiosity: e.radiosity + sol.reflectance[e.face] * sol.ambient,
+                mesh.leaves
+                    .iter()
+                    .map(|&e| {
+                        let el = &mesh.elements[e as usize];
+                        let f = el.face as usize;
+                        ElementValue {
+                            face: f,
+                            polygon: el.polygon,
+                            radiosity: el.radiosity + sol.reflectance[f] * sol.ambient,
+                            open: el.open,
+                        }
                     })
                     .collect()
             },

@@ -10,16 +10,23 @@
 //!
 //! and the radiosity it shoots is its unshot part ΔB_p. Each patch keeps the invariant B_p = S_p + ΔB_p, where
 //! S_p is the total radiosity it has shot so far; that total is what elements created later re-gather from.
+//!
+//! Radiosities are those of the open parts ([`radlab_scene::open_fraction`]): an element with open share o_e
+//! holds B_e over o_e A_e, and the means above are taken over the open areas, B_p = Σ_e o_e A_e B_e / Σ_e o_e
+//! A_e, so an element half under a floor covering neither absorbs nor sends the light its sealed half cannot
+//! receive. Where nothing is sealed every o_e is 1 and these are the plain area means.
 
-use radlab_scene::{Polygon, Rgb, Scene, SolveError};
+use radlab_scene::{Accel, Polygon, Rgb, Scene, SolveError, open_fraction::open_fraction};
+use rayon::prelude::*;
 
 /// A shooting patch.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Patch {
     /// Its geometry.
     pub polygon: Polygon,
-    /// Area: the sum of its elements' areas, so area means over elements are exact.
-    pub area: f64,
+    /// Open area Σ_e o_e A_e over its leaves; until the open shares are estimated, its area (the sum of its
+    /// elements' areas, so area means over elements are exact).
+    pub open_area: f64,
     /// The input face it belongs to.
     pub face: u32,
     /// Whether its face emits (its shots are direct light).
@@ -51,8 +58,18 @@ pub(crate) struct Element {
     pub patch: u32,
     /// First of its four children (consecutive), or [`LEAF`].
     pub first_child: u32,
-    /// Radiosity B_e (W/m²), including emission. Meaningful for leaves; a split element keeps its last value.
+    /// Radiosity B_e (W/m²) of its open part, including emission. Meaningful for leaves; a split element keeps
+    /// its last value.
     pub radiosity: Rgb,
+    /// Open share o_e of its area (1 until estimated).
+    pub open: f64,
+}
+
+impl Element {
+    /// Its open area o_e A_e.
+    pub fn open_area(&self) -> f64 {
+        self.open * self.area
+    }
 }
 
 /// `first_child` of a leaf.
@@ -142,11 +159,12 @@ impl Mesh {
                         patch: patches.len() as u32,
                         first_child: LEAF,
                         radiosity: e_face,
+                        open: 1.0,
                     });
                 }
                 patches.push(Patch {
                     polygon: pp,
-                    area,
+                    open_area: area,
                     face: f as u32,
                     emits: scene.material(f).is_emitter(),
                     unshot: e_face,
@@ -185,7 +203,50 @@ impl Mesh {
         }
     }
 
-    /// Radiosity of patch `p`: the area-weighted mean of its leaves (Cohen et al. 1986).
+    /// Estimates the open share of every element (the roots, before any split) and sets each patch's open
+    /// area from them; returns the rays cast. The stream of element e is keyed by e.
+    pub(crate) fn estimate_open(&mut self, scene: &Scene, accel: &Accel, seed: u64) -> u64 {
+        let rays = self.estimate_open_of(scene, accel, seed, 0..self.elements.len());
+        for p in 0..self.patches.len() {
+            let patch = self.patches[p];
+            let roots = patch.first_root as usize..(patch.first_root + patch.root_count) as usize;
+            self.patches[p].open_area = self.elements[roots].iter().map(Element::open_area).sum();
+        }
+        rays
+    }
+
+    /// Estimates the open share of the elements in `range`; returns the rays cast.
+    pub(crate) fn estimate_open_of(
+        &mut self,
+        scene: &Scene,
+        accel: &Accel,
+        seed: u64,
+        range: std::ops::Range<usize>,
+    ) -> u64 {
+        let first = range.start;
+        let found: Vec<(f64, u64)> = self.elements[range]
+            .par_iter()
+            .enumerate()
+            .map(|(k, e)| {
+                open_fraction(
+                    scene,
+                    accel,
+                    &e.polygon,
+                    e.face as usize,
+                    seed,
+                    (first + k) as u64,
+                )
+            })
+            .collect();
+        let mut rays = 0;
+        for (k, (o, r)) in found.into_iter().enumerate() {
+            self.elements[first + k].open = o;
+            rays += r;
+        }
+        rays
+    }
+
+    /// Radiosity of patch `p`: the open-area-weighted mean of its leaves (Cohen et al. 1986).
     pub fn patch_radiosity(&self, p: usize) -> Rgb {
         let patch = &self.patches[p];
         let mut leaves = Vec::new();
@@ -196,10 +257,10 @@ impl Mesh {
             .iter()
             .map(|&e| {
                 let el = &self.elements[e as usize];
-                el.radiosity * el.area
+                el.radiosity * el.open_area()
             })
             .sum();
-        sum / patch.area
+        sum / patch.open_area
     }
 
     /// Splits the leaves `marked` (ascending) into four children each ([`Polygon::split4`]), appended in the
@@ -248,7 +309,7 @@ mod tests {
         assert_eq!(m.leaves.len(), m.elements.len());
         for (p, patch) in m.patches.iter().enumerate() {
             assert_eq!(patch.root_count, 4);
-            assert!((patch.area - patch.polygon.area()).abs() < 1e-14);
+            assert!((patch.open_area - patch.polygon.area()).abs() < 1e-14);
             for r in patch.first_root..patch.first_root + patch.root_count {
                 let e = &m.elements[r as usize];
                 assert_eq!(e.patch as usize, p);

@@ -137,6 +137,7 @@ impl ElementMesh {
                 face: e.face as FaceId,
                 polygon: e.polygon,
                 radiosity: b,
+                open: 1.0,
             })
             .collect()
     }

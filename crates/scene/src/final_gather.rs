@@ -13,7 +13,10 @@
 //!
 //! Visibility: toward emitting sources (the direct light, whose shadows are sharp) `direct` rays per source
 //! element (default 4 × 4 stratified points on the source, [`DEFAULT_DIRECT_VISIBILITY`]); toward the others
-//! `indirect` rays (default one ray to the centroid, [`DEFAULT_INDIRECT_VISIBILITY`]). The random points of a
+//! `indirect` rays (default one ray to the centroid, [`DEFAULT_INDIRECT_VISIBILITY`]). A source whose
+//! radiosity is that of its open part only ([`ElementValue::open`] < 1, [`crate::open_fraction`]) gets the
+//! `direct` rays too: its visible share must be measured over its area, since one ray to its centroid would
+//! count it whole or not at all. The random points of a
 //! query come from a stream derived from the seed and the query point's coordinates, so an answer depends only
 //! on (solution, point, seed), never on the order or thread of the queries. Sources on the query's own face
 //! (planar, so it cannot see them) and sources with B_j = 0 are skipped.
@@ -142,7 +145,7 @@ impl FinalGather {
             if !(f > 0.0) {
                 continue;
             }
-            let how = if *emits {
+            let how = if *emits || src.open < 1.0 {
                 self.settings.direct
             } else {
                 self.settings.indirect

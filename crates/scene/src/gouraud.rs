@@ -32,8 +32,11 @@ pub struct ElementValue {
     pub face: FaceId,
     /// Its geometry (a triangle or a planar quad).
     pub polygon: Polygon,
-    /// Its radiosity (W/m²).
+    /// Its radiosity (W/m²): over its open part where the solver estimated one
+    /// ([`crate::open_fraction`]), else its area mean.
     pub radiosity: Rgb,
+    /// The share of its area light can reach ([`crate::open_fraction`]); 1 unless the solver estimated it.
+    pub open: f64,
 }
 
 /// Corner values of every element, ready to interpolate.
@@ -330,6 +333,7 @@ mod tests {
                 face: 0,
                 polygon: p,
                 radiosity: field(p.centroid()),
+                open: 1.0,
             })
             .collect()
     }
@@ -355,6 +359,7 @@ mod tests {
                 face: 3,
                 polygon: p,
                 radiosity: field(p.centroid()),
+                open: 1.0,
             })
             .collect();
         let g = GouraudField::new(&els);
@@ -375,6 +380,7 @@ mod tests {
                 face: 0,
                 polygon: c,
                 radiosity: Rgb::splat(1.0 + k as f64),
+                open: 1.0,
             });
         }
         let g = GouraudField::new(&els);

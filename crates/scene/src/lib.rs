@@ -21,6 +21,7 @@ pub mod form_factor;
 pub mod gouraud;
 pub mod io;
 pub mod locate;
+pub mod open_fraction;
 pub mod params;
 pub mod polygon;
 pub mod reconstruction;

@@ -193,6 +193,39 @@ pub fn mixed_box(closed: bool, emission: Rgb) -> Scene {
     b.build().expect("mixed box")
 }
 
+/// The closed [`mixed_box`] with a panel (ρ = 0.5, facing up) a millimetre above its y = 0 face over
+/// x, z ∈ [0.13, 0.71]: its edges cross elements of size 0.2, which then lie partly under the panel, where
+/// they see only its back.
+pub fn covered_box(emission: Rgb) -> Scene {
+    let base = mixed_box(true, emission);
+    let mut b = SceneBuilder::new("covered-box");
+    let mut ids = Vec::new();
+    for m in &base.materials {
+        ids.push(b.add_material(m.clone()).expect("material"));
+    }
+    for f in 0..base.face_count() {
+        let poly = base.polygon(f);
+        b.add_polygon_points(poly.vertices(), ids[base.faces[f].material as usize], "box")
+            .expect("face");
+    }
+    let panel = b
+        .add_material(Material::new("panel", Rgb::splat(0.5), Rgb::ZERO).expect("panel"))
+        .expect("panel");
+    let (lo, hi, y) = (0.13, 0.71, 1e-3);
+    quad(
+        &mut b,
+        [
+            dvec3(lo, y, lo),
+            dvec3(hi, y, lo),
+            dvec3(hi, y, hi),
+            dvec3(lo, y, hi),
+        ],
+        dvec3(0.5, 1.0, 0.5),
+        panel,
+    );
+    b.build().expect("covered box")
+}
+
 /// The opening of the open [`mixed_box`] as a polygon facing into the box (its front sees the interior).
 pub fn mixed_box_opening() -> radlab_scene::Polygon {
     radlab_scene::Polygon::quad(

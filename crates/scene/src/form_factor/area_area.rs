@@ -40,6 +40,15 @@ pub enum VisibilitySampling {
 }
 
 impl VisibilitySampling {
+    /// Whether the estimate samples points over both areas (the jittered grids), so that the share of an
+    /// element from which nothing is visible enters its form factors ([`crate::open_fraction`]).
+    pub fn is_area_sampled(self) -> bool {
+        matches!(
+            self,
+            Self::Jittered2x2 | Self::Jittered4x4 | Self::Jittered8x8
+        )
+    }
+
     /// Rays cast per estimate.
     pub fn rays(self) -> u32 {
         match self {
