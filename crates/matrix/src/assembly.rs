@@ -179,11 +179,17 @@ impl Assembly {
                 (lower, ff, rays)
             })
             .collect();
-        for (k, (lower, ff, rays)) in results.into_iter().enumerate() {
-            let i = rows.start + k;
-            for (t, b) in lower.into_iter().enumerate() {
-                self.matrix[(i + 1 + t) * n + i] = b;
-            }
+        // Scatter A_j F_ji below the diagonal, each row j on its own task (plain stores: any order).
+        self.matrix[(rows.start + 1) * n..]
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(k, row)| {
+                let j = rows.start + 1 + k;
+                for (i, (lower, _, _)) in (rows.start..rows.end.min(j)).zip(&results) {
+                    row[i] = lower[j - i - 1];
+                }
+            });
+        for (_, ff, rays) in results {
             self.form_factors += ff;
             self.rays += rays;
         }
@@ -220,7 +226,7 @@ impl Assembly {
         for (i, d) in diag.into_iter().enumerate() {
             m[i * n + i] = d;
         }
-        self.nonzero = m.iter().filter(|&&g| g != 0.0).count() as u64;
+        self.nonzero = m.par_iter().filter(|&&g| g != 0.0).count() as u64;
     }
 }
 
