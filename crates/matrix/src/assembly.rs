@@ -33,6 +33,9 @@ use rayon::prelude::*;
 /// short enough to trace and long enough to keep both cores busy.
 pub const PAIRS_PER_STEP: usize = 1 << 16;
 
+/// Fewest pairs of a row computed by one rayon task.
+const PAIRS_PER_TASK: usize = 64;
+
 /// Side of the square tiles the symmetrisation pass walks, for cache locality on large matrices.
 const TILE: usize = 64;
 
@@ -167,10 +170,16 @@ impl Assembly {
             .enumerate()
             .map(|(k, row)| {
                 let i = rows.start + k;
+                // A row's pairs are split further when a thread runs out of rows (the last rows of a block
+                // would otherwise leave one thread idle while the other finishes a whole row).
+                let pairs: Vec<(f64, f64, u64, u64)> = (i + 1..n)
+                    .into_par_iter()
+                    .with_min_len(PAIRS_PER_TASK)
+                    .map(|j| pair(mesh, geometry, accel, settings, n, i, j))
+                    .collect();
                 let mut lower = Vec::with_capacity(n - 1 - i);
                 let (mut ff, mut rays) = (0u64, 0u64);
-                for (j, slot) in row.iter_mut().enumerate().skip(i + 1) {
-                    let (a, b, f, r) = pair(mesh, geometry, accel, settings, n, i, j);
+                for (slot, (a, b, f, r)) in row[i + 1..].iter_mut().zip(pairs) {
                     *slot = a;
                     lower.push(b);
                     ff += f;
