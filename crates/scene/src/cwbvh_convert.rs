@@ -18,7 +18,7 @@
 //! computed by the same operations in the same order as obvhs's serial code, so the result is the same CwBvh,
 //! bit for bit, on any number of threads (tested against obvhs's).
 
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU16, AtomicU32, Ordering};
 
 use glam::{UVec3, Vec3A, vec3a};
 use obvhs::{
@@ -64,45 +64,82 @@ struct Decision {
 const INVALID: u8 = u8::MAX;
 
 impl Decision {
-    fn pack(self) -> u64 {
+    /// Kind and slot split in 10 bits (a slot count 0..7, or [`INVALID`] as 15).
+    fn meta(self) -> u16 {
         let kind = match self.kind {
-            Kind::Leaf => 0u64,
+            Kind::Leaf => 0u16,
             Kind::Internal => 1,
             Kind::Distribute => 2,
         };
-        u64::from(self.cost.to_bits())
-            | kind << 32
-            | u64::from(self.left) << 40
-            | u64::from(self.right) << 48
+        kind | u16::from(self.left.min(15)) << 2 | u16::from(self.right.min(15)) << 6
     }
 
-    fn unpack(x: u64) -> Self {
+    fn from_parts(cost: f32, meta: u16) -> Self {
+        let slots = |x: u16| if x == 15 { INVALID } else { x as u8 };
         Self {
-            cost: f32::from_bits(x as u32),
-            kind: match (x >> 32) & 0xff {
+            cost,
+            kind: match meta & 3 {
                 0 => Kind::Leaf,
                 1 => Kind::Internal,
                 _ => Kind::Distribute,
             },
-            left: (x >> 40) as u8,
-            right: (x >> 48) as u8,
+            left: slots((meta >> 2) & 15),
+            right: slots((meta >> 6) & 15),
         }
     }
 }
 
 /// The decisions of every binary node (7 per node), written once each by the task that costs the node and
-/// read after the costing has joined (relaxed atomics: the join orders them).
-struct Decisions(Vec<AtomicU64>);
+/// read after the costing has joined (relaxed atomics: the join orders them). Costs and the rest apart: the
+/// costing reads only costs, the emission only the rest.
+struct Decisions {
+    cost: Vec<AtomicU32>,
+    meta: Vec<AtomicU16>,
+}
 
 impl Decisions {
+    fn new(nodes: usize) -> Self {
+        Self {
+            cost: (0..nodes * 7)
+                .into_par_iter()
+                .map(|_| AtomicU32::new(0))
+                .collect(),
+            meta: (0..nodes * 7)
+                .into_par_iter()
+                .map(|_| AtomicU16::new(0))
+                .collect(),
+        }
+    }
+
     #[inline(always)]
-    fn get(&self, node: u32, i: usize) -> Decision {
-        Decision::unpack(self.0[node as usize * 7 + i].load(Ordering::Relaxed))
+    fn cost(&self, node: u32, i: usize) -> f32 {
+        f32::from_bits(self.cost[node as usize * 7 + i].load(Ordering::Relaxed))
+    }
+
+    /// How many slots the node's children take when it has i + 1 (meaningful for a split).
+    #[inline(always)]
+    fn split(&self, node: u32, i: usize) -> (u8, u8) {
+        let d = Decision::from_parts(
+            0.0,
+            self.meta[node as usize * 7 + i].load(Ordering::Relaxed),
+        );
+        (d.left, d.right)
+    }
+
+    #[inline(always)]
+    fn kind(&self, node: u32, i: usize) -> Kind {
+        Decision::from_parts(
+            0.0,
+            self.meta[node as usize * 7 + i].load(Ordering::Relaxed),
+        )
+        .kind
     }
 
     #[inline(always)]
     fn set(&self, node: u32, i: usize, d: Decision) {
-        self.0[node as usize * 7 + i].store(d.pack(), Ordering::Relaxed);
+        let k = node as usize * 7 + i;
+        self.cost[k].store(d.cost.to_bits(), Ordering::Relaxed);
+        self.meta[k].store(d.meta(), Ordering::Relaxed);
     }
 }
 
@@ -147,8 +184,8 @@ impl Converter<'_> {
                 (self.cost(l, depth + 1), self.cost(r, depth + 1))
             };
             let num = nl + nr;
-            let lc: [f32; 7] = std::array::from_fn(|k| self.decisions.get(l, k).cost);
-            let rc: [f32; 7] = std::array::from_fn(|k| self.decisions.get(r, k).cost);
+            let lc: [f32; 7] = std::array::from_fn(|k| self.decisions.cost(l, k));
+            let rc: [f32; 7] = std::array::from_fn(|k| self.decisions.cost(r, k));
             let cost_leaf = if num <= self.max_prims_per_leaf {
                 (num as f32) * half_area * PRIM_COST
             } else {
@@ -217,9 +254,9 @@ impl Converter<'_> {
             out.1 += 1;
             return;
         }
-        let d = self.decisions.get(n, i);
-        for (child, slots) in [(node.first_index, d.left), (node.first_index + 1, d.right)] {
-            if self.decisions.get(child, slots as usize).kind == Kind::Distribute {
+        let (left, right) = self.decisions.split(n, i);
+        for (child, slots) in [(node.first_index, left), (node.first_index + 1, right)] {
+            if self.decisions.kind(child, slots as usize) == Kind::Distribute {
                 self.collect(child, slots as usize, out);
             } else {
                 out.0[out.1] = child;
@@ -229,7 +266,7 @@ impl Converter<'_> {
     }
 
     fn is_internal(&self, child: u32) -> bool {
-        self.decisions.get(child, 0).kind == Kind::Internal
+        self.decisions.kind(child, 0) == Kind::Internal
     }
 
     /// Counts the wide nodes below the wide node made from `n`, storing the count for every wide internal node.
@@ -419,12 +456,7 @@ pub(crate) fn bvh2_to_cwbvh(bvh2: &Bvh2, max_prims_per_leaf: u32) -> CwBvh {
     let conv = Converter {
         bvh2,
         max_prims_per_leaf: max_prims_per_leaf.clamp(1, 3),
-        decisions: Decisions(
-            (0..len * 7)
-                .into_par_iter()
-                .map(|_| AtomicU64::new(0))
-                .collect(),
-        ),
+        decisions: Decisions::new(len),
         prims: (0..len)
             .into_par_iter()
             .map(|_| AtomicU32::new(0))
