@@ -842,7 +842,6 @@ impl Accel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling;
 
     /// obvhs's parallel build (its `parallel` feature) splits work by the number of rayon threads; the BVH,
     /// and with it the order in which ties between equally distant hits (rays through shared edges) are
@@ -852,27 +851,7 @@ mod tests {
         // More primitives than every parallel threshold of obvhs 0.4's PLOC build (4·10³ for the neighbour
         // search, 3·10⁵ for the merge costs, 5·10⁵ for the leaf setup); one triangle in eight repeated
         // exactly, so that Morton codes tie.
-        let mut r = sampling::rng(5, 0);
-        let mut tris: Vec<Triangle> = Vec::new();
-        while tris.len() < 520_000 {
-            let mut p = || {
-                Vec3A::new(
-                    sampling::uniform(&mut r) as f32,
-                    sampling::uniform(&mut r) as f32,
-                    sampling::uniform(&mut r) as f32,
-                )
-            };
-            let c = 500.0 * p();
-            let t = Triangle {
-                v0: c,
-                v1: c + p(),
-                v2: c + p(),
-            };
-            tris.push(t);
-            if tris.len().is_multiple_of(8) {
-                tris.push(t);
-            }
-        }
+        let tris = crate::cwbvh_convert::tests::random_triangles(5, 520_000, 500.0, 8);
         // The default preset (the others run the same parallel stages with other parameters).
         let build = |threads: usize| {
             rayon::ThreadPoolBuilder::new()

@@ -482,19 +482,22 @@ pub(crate) fn bvh2_to_cwbvh(bvh2: &Bvh2, max_prims_per_leaf: u32) -> CwBvh {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::sampling;
     use obvhs::{BvhBuildParams, aabb::Aabb, ploc::PlocBuilder, triangle::Triangle};
 
-    /// The same CwBvh as obvhs's serial conversion, node for node and primitive for primitive, on 1 and 2
-    /// threads, for every leaf size, on random triangles (some repeated, so that boxes tie) after PLOC and
-    /// reinsertion.
-    #[test]
-    fn same_wide_bvh_as_obvhs_on_any_number_of_threads() {
-        let mut r = sampling::rng(7, 0);
+    /// At least `count` random triangles of unit size in a cube of side `spread` (stream `seed`), every
+    /// `repeat_every`-th one repeated exactly, so that boxes and Morton codes tie.
+    pub(crate) fn random_triangles(
+        seed: u64,
+        count: usize,
+        spread: f32,
+        repeat_every: usize,
+    ) -> Vec<Triangle> {
+        let mut r = sampling::rng(seed, 0);
         let mut tris: Vec<Triangle> = Vec::new();
-        while tris.len() < 30_000 {
+        while tris.len() < count {
             let mut p = || {
                 Vec3A::new(
                     sampling::uniform(&mut r) as f32,
@@ -502,17 +505,26 @@ mod tests {
                     sampling::uniform(&mut r) as f32,
                 )
             };
-            let c = 40.0 * p();
+            let c = spread * p();
             let t = Triangle {
                 v0: c,
                 v1: c + p(),
                 v2: c + p(),
             };
             tris.push(t);
-            if tris.len().is_multiple_of(9) {
+            if tris.len().is_multiple_of(repeat_every) {
                 tris.push(t);
             }
         }
+        tris
+    }
+
+    /// The same CwBvh as obvhs's serial conversion, node for node and primitive for primitive, on 1 and 2
+    /// threads, for every leaf size, on random triangles (some repeated, so that boxes tie) after PLOC and
+    /// reinsertion.
+    #[test]
+    fn same_wide_bvh_as_obvhs_on_any_number_of_threads() {
+        let tris = random_triangles(7, 30_000, 40.0, 9);
         let params = BvhBuildParams::fast_build();
         let boxes: Vec<Aabb> = tris.iter().map(Triangle::aabb).collect();
         let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
