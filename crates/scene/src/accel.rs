@@ -185,15 +185,19 @@ fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
     );
     bvh2.uses_spatial_splits = params.pre_split;
     ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-    // The same CwBvh either way: obvhs's serial conversion is the quicker on one thread, ours (its
-    // recursions split over rayon tasks) on more.
+    // The same CwBvh either way: obvhs's serial conversion is the quicker on one thread and for small
+    // scenes, ours (its recursions split over rayon tasks) for large ones on more threads.
     let max_prims = params.max_prims_per_leaf.clamp(1, 3);
-    if rayon::current_num_threads() > 1 {
+    if rayon::current_num_threads() > 1 && tris.len() >= PARALLEL_CONVERSION_MIN {
         crate::cwbvh_convert::bvh2_to_cwbvh(&bvh2, max_prims)
     } else {
         obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh2, max_prims, true, false)
     }
 }
+
+/// Fewest triangles for which the wide BVH conversion runs on rayon tasks (below, rayon's overhead is
+/// comparable with the serial conversion's fraction of a millisecond).
+const PARALLEL_CONVERSION_MIN: usize = 4096;
 
 /// Number of ray-counter slots ([`RayCounter`]); threads beyond this many share slots (still exact).
 const COUNTER_SLOTS: usize = 64;
