@@ -65,8 +65,9 @@ pub struct StepRecord {
 /// The loop runs on a thread of rayon's pool (`rayon::scope` moves it there), so the solvers' parallel loops
 /// start from a worker: called from a thread outside the pool, every parallel loop would hand its work to the
 /// pool and put the caller to sleep until it is done, two thread wake-ups per loop. Progressive shooting runs
-/// one short parallel loop per shot (about 1 ms on the Cornell box), and those wake-ups cost it 10–15% at 1
-/// thread and more at 2 on a loaded machine (measured: 1.61 s → 1.40 s at 1 thread, same faces.csv).
+/// one short parallel loop per shot (about 1 ms on the Cornell box); on a loaded machine its 1-thread solve
+/// went from 1.345 s to 1.275 s (median of 7 alternating runs; 1.61 s → 1.40 s in an earlier, busier run),
+/// with the same faces.csv.
 pub fn run(
     solver: &mut dyn Solver,
     limits: Limits,
