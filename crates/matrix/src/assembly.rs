@@ -33,6 +33,9 @@ use rayon::prelude::*;
 /// short enough to trace and long enough to keep both cores busy.
 pub const PAIRS_PER_STEP: usize = 1 << 16;
 
+/// Fewest pairs of a row computed by one rayon task.
+const PAIRS_PER_TASK: usize = 64;
+
 /// Side of the square tiles the symmetrisation pass walks, for cache locality on large matrices.
 const TILE: usize = 64;
 
@@ -167,10 +170,16 @@ impl Assembly {
             .enumerate()
             .map(|(k, row)| {
                 let i = rows.start + k;
+                // A row's pairs are split further when a thread runs out of rows (the last rows of a block
+                // would otherwise leave one thread idle while the other finishes a whole row).
+                let pairs: Vec<(f64, f64, u64, u64)> = (i + 1..n)
+                    .into_par_iter()
+                    .with_min_len(PAIRS_PER_TASK)
+                    .map(|j| pair(mesh, geometry, accel, settings, n, i, j))
+                    .collect();
                 let mut lower = Vec::with_capacity(n - 1 - i);
                 let (mut ff, mut rays) = (0u64, 0u64);
-                for (j, slot) in row.iter_mut().enumerate().skip(i + 1) {
-                    let (a, b, f, r) = pair(mesh, geometry, accel, settings, n, i, j);
+                for (slot, (a, b, f, r)) in row[i + 1..].iter_mut().zip(pairs) {
                     *slot = a;
                     lower.push(b);
                     ff += f;
@@ -179,11 +188,17 @@ impl Assembly {
                 (lower, ff, rays)
             })
             .collect();
-        for (k, (lower, ff, rays)) in results.into_iter().enumerate() {
-            let i = rows.start + k;
-            for (t, b) in lower.into_iter().enumerate() {
-                self.matrix[(i + 1 + t) * n + i] = b;
-            }
+        // Scatter A_j F_ji below the diagonal, each row j on its own task (plain stores: any order).
+        self.matrix[(rows.start + 1) * n..]
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(k, row)| {
+                let j = rows.start + 1 + k;
+                for (i, (lower, _, _)) in (rows.start..rows.end.min(j)).zip(&results) {
+                    row[i] = lower[j - i - 1];
+                }
+            });
+        for (_, ff, rays) in results {
             self.form_factors += ff;
             self.rays += rays;
         }
@@ -220,7 +235,7 @@ impl Assembly {
         for (i, d) in diag.into_iter().enumerate() {
             m[i * n + i] = d;
         }
-        self.nonzero = m.iter().filter(|&&g| g != 0.0).count() as u64;
+        self.nonzero = m.par_iter().filter(|&&g| g != 0.0).count() as u64;
     }
 }
 

@@ -148,17 +148,20 @@ pub(crate) fn refine(
     let mut split_total = 0;
     let mut work = Work::default();
     loop {
-        let mut marked: Vec<u32> = Vec::new();
-        for &(a, b) in pairs.iter() {
-            let (ea, eb) = (&mesh.elements[a as usize], &mesh.elements[b as usize]);
-            if contrast(ea.radiosity, eb.radiosity) > r.threshold {
-                for (id, el) in [(a, ea), (b, eb)] {
-                    if splittable(el, r.min_element_size) {
-                        marked.push(id);
-                    }
-                }
-            }
-        }
+        // Every step scans all pairs: on rayon threads (sorted after, so the same on any number of threads).
+        let elements = &mesh.elements;
+        let mut marked: Vec<u32> = pairs
+            .par_iter()
+            .with_min_len(1024)
+            .flat_map_iter(|&(a, b)| {
+                let (ea, eb) = (&elements[a as usize], &elements[b as usize]);
+                let split = contrast(ea.radiosity, eb.radiosity) > r.threshold;
+                [(a, ea), (b, eb)]
+                    .into_iter()
+                    .filter(move |(_, el)| split && splittable(el, r.min_element_size))
+                    .map(|(id, _)| id)
+            })
+            .collect();
         marked.sort_unstable();
         marked.dedup();
         if marked.is_empty() {

@@ -10,7 +10,7 @@
 //!   load cannot bias.
 //! - The 2-thread speed-up of closest hit and visibility (default preset, rays split into chunks over a rayon
 //!   pool of 1 and then 2 threads, in alternation; printed), and the ray count, which must be the same.
-//! - BVH build time of the bumpy sphere with 10⁶ triangles on pools of 1 and 2 threads.
+//! - BVH build time of the bumpy sphere with 10⁶ triangles on pools of 1 and 2 threads (`Fast` and `VeryFast`).
 //! - BVH build time per preset, and BVH nodes and triangles visited per ray (printed once per scene and
 //!   preset, from `intersect_counting` / `visible_counting` over the same rays): a cost no other process
 //!   on the machine can disturb.
@@ -35,7 +35,12 @@ use radlab_scene::sampling::{self, Rng};
 use radlab_scene::{Accel, AccelPreset, FaceId, Ray, Scene, builtin};
 use rayon::prelude::*;
 
-const PRESETS: [AccelPreset; 3] = [AccelPreset::Fast, AccelPreset::Medium, AccelPreset::Quality];
+const PRESETS: [AccelPreset; 4] = [
+    AccelPreset::Fast,
+    AccelPreset::Medium,
+    AccelPreset::Quality,
+    AccelPreset::VeryFast,
+];
 const RAYS: usize = 20_000;
 
 /// A face chosen with probability proportional to area, and a uniform point on it.
@@ -391,6 +396,16 @@ fn build(c: &mut Criterion) {
         g.bench_function(
             BenchmarkId::new("Fast", format!("{threads}-threads")),
             |b| b.iter(|| pool.install(|| Accel::new(&scene).triangle_count())),
+        );
+        g.bench_function(
+            BenchmarkId::new("VeryFast", format!("{threads}-threads")),
+            |b| {
+                b.iter(|| {
+                    pool.install(|| {
+                        Accel::with_preset(&scene, AccelPreset::VeryFast).triangle_count()
+                    })
+                })
+            },
         );
     }
     g.finish();

@@ -1,6 +1,6 @@
 //! Ray casting over the scene's faces: closest hit and point-to-point visibility, on an obvhs compressed
-//! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion (obvhs's parallel build: the same BVH
-//! on any number of rayon threads).
+//! wide BVH (CwBvh, Ylitie et al. 2017) built with PLOC and reinsertion (obvhs's parallel build) and converted
+//! to the wide BVH on rayon tasks (`cwbvh_convert`): the same BVH on any number of rayon threads.
 //!
 //! Two stages per candidate triangle. The BVH and a first triangle test run in f32 on coordinates normalised
 //! to the scene's bounds (centre at 0, diagonal [`NORMALISED_DIAGONAL`]), so their precision is relative to the
@@ -40,14 +40,8 @@ use std::time::Duration;
 
 use glam::{DVec3, UVec2, Vec3A, Vec4};
 use obvhs::{
-    BvhBuildParams,
-    aabb::Aabb,
-    bvh2::reinsertion::ReinsertionOptimizer,
-    cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh},
-    ploc::PlocBuilder,
-    ray::Ray as BvhRay,
-    splits::split_aabbs_preset,
-    triangle::Triangle,
+    BvhBuildParams, aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, cwbvh::CwBvh,
+    ploc::PlocBuilder, ray::Ray as BvhRay, splits::split_aabbs_preset, triangle::Triangle,
 };
 
 use rayon::prelude::*;
@@ -103,10 +97,16 @@ pub struct TraversalCost {
 /// 4.2–4.7 triangles per closest hit, within 3% of each other) and cast rays at the same rate within the
 /// machine's noise, while `Quality` builds 5–13 times slower than `Fast` (20 s against 1.6 s for 10⁶
 /// triangles) and `Medium` 1.1–1.4 times. Only the 38-triangle Cornell box shows a difference (`Quality`
-/// visits 30% fewer nodes than `Fast`). So `Fast` is the default.
+/// visits 30% fewer nodes than `Fast`). So `Fast` is the default. `VeryFast` (added later) builds quicker
+/// with about the same traversal cost (see its entry); `Fast` stays the default so that the BVH, and with it
+/// the face a ray through a shared edge reports, does not change under existing results.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AccelPreset {
-    /// obvhs `fast_build`: quickest build; the default.
+    /// obvhs `very_fast_build`: PLOC pairing nearest neighbours only (search distance 1) and a lighter
+    /// reinsertion pass: about a quarter less PLOC time than `Fast` at 10⁶ triangles, with the same nodes and
+    /// triangles per ray on the bumped spheres (within 2%) and 5–9% more nodes on the tessellated Cornell box.
+    VeryFast,
+    /// obvhs `fast_build`: the default.
     #[default]
     Fast,
     /// obvhs `medium_build`: about as quick to build as `Fast`.
@@ -118,6 +118,7 @@ pub enum AccelPreset {
 impl AccelPreset {
     fn params(self) -> BvhBuildParams {
         match self {
+            AccelPreset::VeryFast => BvhBuildParams::very_fast_build(),
             AccelPreset::Fast => BvhBuildParams::fast_build(),
             AccelPreset::Medium => BvhBuildParams::medium_build(),
             AccelPreset::Quality => BvhBuildParams::very_slow_build(),
@@ -152,7 +153,7 @@ pub const F32_FILTER_SHIFT: f64 = 1e-5;
 pub const BOX_PAD_REL: f64 = 1e-6;
 
 /// The BVH over `tris`: obvhs's PLOC build (optionally with spatial pre-splits), reinsertion and conversion to
-/// a CwBvh, over primitive boxes padded by [`BOX_PAD_REL`] (the steps of obvhs's `build_cwbvh_from_tris`,
+/// a CwBvh (on rayon threads: `cwbvh_convert`), over primitive boxes padded by [`BOX_PAD_REL`] (the steps of obvhs's `build_cwbvh_from_tris`,
 /// which offers no padding).
 fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
     let mut boxes: Vec<Aabb> = tris.par_iter().map(Triangle::aabb).collect();
@@ -184,8 +185,19 @@ fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
     );
     bvh2.uses_spatial_splits = params.pre_split;
     ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-    bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+    // The same CwBvh either way: obvhs's serial conversion is the quicker on one thread and for small
+    // scenes, ours (its recursions split over rayon tasks) for large ones on more threads.
+    let max_prims = params.max_prims_per_leaf.clamp(1, 3);
+    if rayon::current_num_threads() > 1 && tris.len() >= PARALLEL_CONVERSION_MIN {
+        crate::cwbvh_convert::bvh2_to_cwbvh(&bvh2, max_prims)
+    } else {
+        obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh2, max_prims, true, false)
+    }
 }
+
+/// Fewest triangles for which the wide BVH conversion runs on rayon tasks (below, rayon's overhead is
+/// comparable with the serial conversion's fraction of a millisecond).
+const PARALLEL_CONVERSION_MIN: usize = 4096;
 
 /// Number of ray-counter slots ([`RayCounter`]); threads beyond this many share slots (still exact).
 const COUNTER_SLOTS: usize = 64;
@@ -407,31 +419,33 @@ impl Accel {
         let offset = 0.5 * (lo + hi);
         let scale = scene.diagonal().max(f64::MIN_POSITIVE);
         let inv_scale = NORMALISED_DIAGONAL / scale;
-        let verts: Vec<DVec3> = scene.vertices.iter().map(|&p| p - offset).collect();
+        let verts: Vec<DVec3> = scene.vertices.par_iter().map(|&p| p - offset).collect();
         let to32 = |i: u32| Vec3A::from((verts[i as usize] * inv_scale).as_vec3());
+        // The largest of the same values in any grouping: the same on any number of threads.
         let vert_max = verts
-            .iter()
+            .par_iter()
             .map(|&v| (v * inv_scale).abs().max_element())
-            .fold(0.0, f64::max) as f32;
-        let mut tris = Vec::with_capacity(scene.faces.len() * 2);
-        let mut tri_face: Vec<u32> = Vec::with_capacity(scene.faces.len() * 2);
-        let mut tri_verts = Vec::with_capacity(scene.faces.len() * 2);
-        for (f, face) in scene.faces.iter().enumerate() {
-            let idx = face.indices;
-            let mut push = |a: u32, b: u32, c: u32| {
-                tris.push(Triangle {
-                    v0: to32(a),
-                    v1: to32(b),
-                    v2: to32(c),
-                });
-                tri_face.push(f as u32);
-                tri_verts.push([a, b, c]);
-            };
-            push(idx[0], idx[1], idx[2]);
-            if face.vertex_count() == 4 {
-                push(idx[0], idx[2], idx[3]);
-            }
-        }
+            .reduce(|| 0.0, f64::max) as f32;
+        // Triangles in face order (a quad's two after each other), on any number of threads.
+        let (tri_face, tri_verts): (Vec<u32>, Vec<[u32; 3]>) = scene
+            .faces
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(f, face)| {
+                let idx = face.indices;
+                let quad = face.vertex_count() == 4;
+                std::iter::once((f as u32, [idx[0], idx[1], idx[2]]))
+                    .chain(quad.then_some((f as u32, [idx[0], idx[2], idx[3]])))
+            })
+            .unzip();
+        let tris: Vec<Triangle> = tri_verts
+            .par_iter()
+            .map(|&[a, b, c]| Triangle {
+                v0: to32(a),
+                v1: to32(b),
+                v2: to32(c),
+            })
+            .collect();
         let start = std::time::Instant::now();
         let bvh = build_bvh(&tris, preset.params());
         let slots = &bvh.primitive_indices;
@@ -832,7 +846,6 @@ impl Accel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling;
 
     /// obvhs's parallel build (its `parallel` feature) splits work by the number of rayon threads; the BVH,
     /// and with it the order in which ties between equally distant hits (rays through shared edges) are
@@ -842,27 +855,7 @@ mod tests {
         // More primitives than every parallel threshold of obvhs 0.4's PLOC build (4·10³ for the neighbour
         // search, 3·10⁵ for the merge costs, 5·10⁵ for the leaf setup); one triangle in eight repeated
         // exactly, so that Morton codes tie.
-        let mut r = sampling::rng(5, 0);
-        let mut tris: Vec<Triangle> = Vec::new();
-        while tris.len() < 520_000 {
-            let mut p = || {
-                Vec3A::new(
-                    sampling::uniform(&mut r) as f32,
-                    sampling::uniform(&mut r) as f32,
-                    sampling::uniform(&mut r) as f32,
-                )
-            };
-            let c = 500.0 * p();
-            let t = Triangle {
-                v0: c,
-                v1: c + p(),
-                v2: c + p(),
-            };
-            tris.push(t);
-            if tris.len().is_multiple_of(8) {
-                tris.push(t);
-            }
-        }
+        let tris = crate::cwbvh_convert::tests::random_triangles(5, 520_000, 500.0, 8);
         // The default preset (the others run the same parallel stages with other parameters).
         let build = |threads: usize| {
             rayon::ThreadPoolBuilder::new()

@@ -11,6 +11,7 @@
 pub mod accel;
 pub mod builtin;
 pub mod camera;
+mod cwbvh_convert;
 pub mod edge_adjacency;
 pub mod elements;
 pub mod error;
