@@ -215,14 +215,16 @@ pub(crate) fn refine(
             let c0 = parent.first_child as usize;
             let children = &mesh.elements[c0..c0 + 4];
             let after: Rgb = children.iter().map(|c| c.open_area() * c.radiosity).sum();
-            let after_area: f64 = children.iter().map(|c| c.open_area()).sum();
+            let same_open = children.iter().all(|c| c.open == parent.open);
             let patch = &mut mesh.patches[parent.patch as usize];
             let d_sum = after - parent.open_area() * parent.radiosity;
-            let d_area = after_area - parent.open_area();
             let before = patch.unshot;
-            if d_area == 0.0 {
+            if same_open {
+                // The children's areas sum to their parent's (up to rounding): the open area stays.
                 patch.unshot += d_sum / patch.open_area;
             } else {
+                let after_area: f64 = children.iter().map(|c| c.open_area()).sum();
+                let d_area = after_area - parent.open_area();
                 let b = patch.shot + patch.unshot;
                 let area = patch.open_area + d_area;
                 patch.unshot = (b * patch.open_area + d_sum) / area - patch.shot;
