@@ -4,6 +4,8 @@
 //! - at r itself (HSA91's per-link gather; cluster links), its contribution pushed to r's children;
 //! - at each input face below r (an oriented cluster receiver hands each face its own share, Smits, Arvo &
 //!   Greenberg 1994), then pushed within the face;
+//! - at the shallowest nodes below r that the transport resolves, or the input faces where none on the way
+//!   does ([`GatherAt::Descend`]), then pushed below;
 //! - at each leaf below r, with the kernel integrated over the leaf itself:
 //!   H_leaf = Σ_{(a←s), a ∋ leaf} V_as F_{leaf→s} B_s, F_{leaf→s} by the leaf's own Gauss points. The sources
 //!   on a leaf's path partition what its face sees, so the exact point-to-polygon factors sum to the point's
@@ -50,7 +52,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         &self,
         t: u32,
         old: &[RowEntry<T::Coefficient>],
-        distributes: &[bool],
+        below: &[Option<Vec<GatherAt>>],
     ) -> (Vec<RowEntry<T::Coefficient>>, u64) {
         let node = &self.nodes[t as usize];
         let leaf = self.children[t as usize].1 == 0;
@@ -73,7 +75,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 let src = &self.nodes[l.source as usize];
                 let here = match self.kernel.gather_at(node, src) {
                     GatherAt::Receiver => true,
-                    GatherAt::Faces => within_face,
+                    GatherAt::Faces | GatherAt::Descend => within_face,
                     GatherAt::Leaves => leaf,
                 };
                 if here {
@@ -82,20 +84,34 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
         }
         let face_target = self.is_face_target(t);
-        if leaf || face_target {
+        // Nodes above the faces are targets of the descending links of their ancestors.
+        if leaf || face_target || !within_face {
+            // The ancestors passed so far: the nodes strictly between the current ancestor and t.
+            let mut between: Vec<u32> = Vec::new();
             let mut a = self.parent[t as usize];
             while a != NONE {
-                if distributes[a as usize] && (renew || self.dirty[a as usize]) {
+                if let Some(modes) = &below[a as usize]
+                    && (renew || self.dirty[a as usize])
+                {
                     let recv = &self.nodes[a as usize];
-                    for (k, l) in self.links[a as usize].iter().enumerate() {
+                    for ((k, l), mode) in self.links[a as usize].iter().enumerate().zip(modes) {
                         if l.overlap {
                             continue;
                         }
                         let src = &self.nodes[l.source as usize];
-                        let here = match self.kernel.gather_at(recv, src) {
+                        let here = match mode {
                             GatherAt::Receiver => false,
                             GatherAt::Faces => face_target && recv.face().is_none(),
                             GatherAt::Leaves => leaf,
+                            // The shallowest resolving node, or the face if none above it resolves.
+                            GatherAt::Descend => {
+                                recv.face().is_none()
+                                    && (face_target
+                                        || (!within_face && self.kernel.resolves(node, src, l)))
+                                    && !between.iter().any(|&b| {
+                                        self.kernel.resolves(&self.nodes[b as usize], src, l)
+                                    })
+                            }
                         };
                         if here {
                             evaluations += 1;
@@ -103,6 +119,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                         }
                     }
                 }
+                between.push(a);
                 a = self.parent[a as usize];
             }
         }
@@ -210,23 +227,29 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 stale[i] = true;
             }
         }
-        // Nodes with links evaluated below them.
-        let distributes: Vec<bool> = (0..n)
+        // Where each link is evaluated, for the nodes with links evaluated below them (asked once per
+        // rebuild, not at every target below).
+        let below: Vec<Option<Vec<GatherAt>>> = (0..n)
             .into_par_iter()
             .map(|a| {
-                self.links[a].iter().any(|l| {
-                    !l.overlap
-                        && self
-                            .kernel
+                let modes: Vec<GatherAt> = self.links[a]
+                    .iter()
+                    .map(|l| {
+                        self.kernel
                             .gather_at(&self.nodes[a], &self.nodes[l.source as usize])
-                            != GatherAt::Receiver
-                })
+                    })
+                    .collect();
+                let distributes = self.links[a]
+                    .iter()
+                    .zip(&modes)
+                    .any(|(l, m)| !l.overlap && *m != GatherAt::Receiver);
+                distributes.then_some(modes)
             })
             .collect();
         let todo: Vec<u32> = (0..n as u32).filter(|&i| stale[i as usize]).collect();
         let built: Vec<(Vec<RowEntry<T::Coefficient>>, u64)> = todo
             .par_iter()
-            .map(|&t| self.build_row(t, &self.rows[t as usize], &distributes))
+            .map(|&t| self.build_row(t, &self.rows[t as usize], &below))
             .collect();
         for (t, (row, evaluations)) in todo.into_iter().zip(built) {
             self.rows[t as usize] = row;

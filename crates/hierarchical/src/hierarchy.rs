@@ -383,6 +383,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
             i += 1;
         }
+        // The expanded nodes' radiosity and exitance as their leaves' (a node made before its children holds
+        // only what its own reflection of zero irradiance gives, which for a transport whose exitance sums
+        // its faces' is nothing): the first pass then sends what the leaves emit.
+        let (mut b, mut x) = (
+            std::mem::take(&mut self.radiosity),
+            std::mem::take(&mut self.exitance),
+        );
+        self.pull(&mut b, &mut x);
+        (self.radiosity, self.exitance) = (b, x);
         self.operator_changed();
         Ok(())
     }

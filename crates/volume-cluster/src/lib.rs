@@ -20,13 +20,17 @@
 //! ## Transfers, side by side
 //! - `isotropic`: a cluster is a sphere of projected area A/4; O(1) per link. Biased: a flat cluster facing a
 //!   light receives a quarter of the truth, and a cluster's faces all get its mean irradiance.
-//! - `alpha`: a cluster source sums Σ A_i max(0, n_i·d) B_i over its faces at every pass; a cluster receiver
-//!   hands each face its own cosine share. O(faces) per link, every face below a cluster link touched each pass.
+//! - `alpha`: a cluster source sends Σ A_i max(0, n_i·d) B_i (P·d from its power vector where its normal
+//!   cone faces d, zero where it faces away, a sum over its faces only where it straddles d); a cluster
+//!   receiver hands each face its own share, evaluated at the face's own Gauss points, except below clusters
+//!   every face of which has the source behind its plane (nothing to hand). O(faces) per link on the
+//!   receiving side: every face below a cluster link it faces is touched each pass.
 //! - `directional`: a cluster source every face of which faces d sends P·d (P = Σ A_i B_i n_i), one that
 //!   straddles d the order-2 spherical-harmonic estimate of J; a receiving cluster every face of which faces
 //!   the source gathers the link's irradiance field (value and gradient at its centroid, pushed to its
-//!   faces), links behind every face carry nothing, and only links that straddle its faces are evaluated
-//!   face by face ([`normal_cone`]). O(1) per link but for straddling receivers.
+//!   faces), links behind every face carry nothing, and a link that straddles its faces descends to the
+//!   sub-clusters it does not straddle, reaching faces one by one only along the line where the surface
+//!   turns away ([`normal_cone`]). O(1) per link but for straddling receivers.
 //!
 //! ## Cost
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
