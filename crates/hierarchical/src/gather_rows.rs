@@ -26,9 +26,10 @@
 //!
 //! Every evaluation below the receiver or the source is a kernel evaluation and is counted in the engine's
 //! form factors, so a gather that re-evaluates links pays for it in the statistics. Rows are rebuilt only for
-//! targets below a node whose links changed, and only the entries of the changed nodes' links are evaluated
-//! again; a link's source weights are evaluated again only when its receiver's links changed or a node below
-//! its source was split.
+//! targets below a node whose links changed, and only the entries of links made since the last build are
+//! evaluated: a refinement keeps a node's other links unchanged (a link is a pure function of its two ends),
+//! so their coefficients are found in the old row by source; a link's source weights are evaluated again
+//! only when its receiver's links changed or a node below its source was split.
 
 use rayon::prelude::*;
 
@@ -53,6 +54,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         t: u32,
         old: &[RowEntry<T::Coefficient>],
         below: &[Option<Vec<GatherAt>>],
+        reuse: &[bool],
     ) -> (Vec<RowEntry<T::Coefficient>>, u64) {
         let node = &self.nodes[t as usize];
         let leaf = self.children[t as usize].1 == 0;
@@ -65,6 +67,24 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 .filter(|(r, _, _)| !self.dirty[*r as usize])
                 .copied()
                 .collect()
+        };
+        // The old entries of changed nodes whose links can be told apart by source, by (node, source).
+        let mut kept: Vec<(u32, u32, T::Coefficient)> = old
+            .iter()
+            .filter(|(r, _, _)| (renew || self.dirty[*r as usize]) && reuse[*r as usize])
+            .filter_map(|&(r, k, c)| {
+                let s = *self.row_sources.get(r as usize)?.get(k as usize)?;
+                Some((r, s, c))
+            })
+            .collect();
+        kept.sort_unstable_by_key(|(r, s, _)| (*r, *s));
+        let find = |r: u32, s: u32| -> Option<T::Coefficient> {
+            if !reuse[r as usize] {
+                return None;
+            }
+            kept.binary_search_by_key(&(r, s), |(r, s, _)| (*r, *s))
+                .ok()
+                .map(|i| kept[i].2)
         };
         let mut evaluations = 0;
         if renew {
@@ -79,7 +99,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     GatherAt::Leaves => leaf,
                 };
                 if here {
-                    row.push((t, k as u32, self.kernel.coefficient(node, src, l, true)));
+                    let c = find(t, l.source)
+                        .unwrap_or_else(|| self.kernel.coefficient(node, src, l, true));
+                    row.push((t, k as u32, c));
                 }
             }
         }
@@ -114,8 +136,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                             }
                         };
                         if here {
-                            evaluations += 1;
-                            row.push((a, k as u32, self.kernel.coefficient(node, src, l, false)));
+                            let c = find(a, l.source).unwrap_or_else(|| {
+                                evaluations += 1;
+                                self.kernel.coefficient(node, src, l, false)
+                            });
+                            row.push((a, k as u32, c));
                         }
                     }
                 }
@@ -246,14 +271,36 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 distributes.then_some(modes)
             })
             .collect();
+        // Changed nodes whose old and new links can be told apart by source (a node's links have distinct
+        // sources unless a transport links a pair twice; then its entries are evaluated again).
+        let distinct = |s: &mut Vec<u32>| {
+            s.sort_unstable();
+            s.windows(2).all(|w| w[0] != w[1])
+        };
+        let reuse: Vec<bool> = (0..n)
+            .into_par_iter()
+            .map(|a| {
+                let Some(prev) = self.row_sources.get(a) else {
+                    return false;
+                };
+                let mut now: Vec<u32> = self.links[a].iter().map(|l| l.source).collect();
+                !self.dirty[a] || (distinct(&mut prev.clone()) && distinct(&mut now))
+            })
+            .collect();
         let todo: Vec<u32> = (0..n as u32).filter(|&i| stale[i as usize]).collect();
         let built: Vec<(Vec<RowEntry<T::Coefficient>>, u64)> = todo
             .par_iter()
-            .map(|&t| self.build_row(t, &self.rows[t as usize], &below))
+            .map(|&t| self.build_row(t, &self.rows[t as usize], &below, &reuse))
             .collect();
         for (t, (row, evaluations)) in todo.into_iter().zip(built) {
             self.rows[t as usize] = row;
             self.form_factors += evaluations;
+        }
+        self.row_sources.resize(n, Vec::new());
+        for a in 0..n {
+            if self.dirty[a] {
+                self.row_sources[a] = self.links[a].iter().map(|l| l.source).collect();
+            }
         }
         self.dirty.iter_mut().for_each(|d| *d = false);
     }
