@@ -33,6 +33,17 @@
 //!   turns away ([`normal_cone`]). O(1) per link but for straddling receivers.
 //!
 //! ## Cost
+//! Measured side by side (release, `radlab solve "builtin:concentric-spheres?faces=K" --method volume-cluster
+//! --set transfer=T --set reconstruction=constant --threads 1`, CPU seconds of the solve, the two builds
+//! alternated on the 2-core machine loaded by other builds, 2026-11-30), before → after the normal-cone
+//! shortcuts, the descending gather and the row rebuild that evaluates only new links; K = 1e3 / 3e3 / 1e4 /
+//! 3e4:
+//! - directional: 5.60 / 13.9 / 53.1 / 238 s → 5.16 / 14.2 / 51.7 / 189 s; (face, link) and other kernel
+//!   evaluations 4.3 / 3.3 / 23.6 / 168 M → 3.1 / 2.2 / 7.9 / 26 M; memory held at 3e4 3.2 → 1.8 GiB;
+//! - α: 6.58 / 13.6 / 75.4 s → 5.09 / 13.7 / 73.1 s; evaluations 5.6 / 17.2 / 190 M → 3.4 / 6.5 / 56 M;
+//! - links 0.40 / 1.22 / 4.23 / 13.0 M (slope 1.03) at 16 visibility rays each: the rays are 43–48% of the
+//!   solve at 1e4 and, with the links, set the time slope below 1e4; above it the straddling receivers'
+//!   face-by-face evaluations did (directional 1.37 from 1e4 to 3e4 before, 1.18 after).
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`
 //! rays per link between points on the two ends' faces.

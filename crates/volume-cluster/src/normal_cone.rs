@@ -21,8 +21,9 @@
 //! in its own size) if it does not straddle, and hands it further down if it does; only faces below clusters
 //! that straddle all the way down are evaluated one by one (Smits, Arvo & Greenberg 1994's α gather). A flat
 //! or gently curved cluster straddles only links near its own plane, and of a straddling cluster only the
-//! children along the line where its surface turns away from the source straddle again: about √m faces of
-//! a cluster of m faces are evaluated instead of m.
+//! children along the line where its surface turns away from the source straddle again (on a smooth
+//! surface about √m faces of a cluster of m faces are evaluated instead of m; measured on the concentric
+//! spheres at 3e4 faces, 26 M kernel evaluations instead of 168 M).
 
 use std::f64::consts::FRAC_PI_2;
 
