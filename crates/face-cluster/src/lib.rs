@@ -58,8 +58,8 @@
 //! CPU, peak RSS 2.5 GiB; warm, 17–26 s wall; the hierarchy build alone 17.5–18.8 s of CPU.
 //!
 //! Where the solve does badly (measured on concentric spheres, a furnace with B = E/(1 − ρ), through the
-//! operator's row sums: [`radlab_hierarchical::Engine::furnace_response`], M u against u at unit radiosity,
-//! one in a closed scene):
+//! operator's row sums: [`radlab_hierarchical::Engine::row_sums`], the irradiance each leaf gathers when
+//! every leaf sends B = 1, one in a closed scene):
 //! - It loses energy: at 600 faces (ρ = 0.5) the area mean of the leaves' row sums is 0.9867 at ε = 1e-3,
 //!   0.9903 at ε = 1e-4 and 0.9910 at ε = 1e-5 (0.9667 at ε = 1e-3 with one visibility ray per link), so a
 //!   loss of about 0.9% is not controlled by ε; the furnace's error is that loss amplified by 1/(1 − ρ). On the

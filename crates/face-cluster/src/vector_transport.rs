@@ -541,4 +541,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             FaceNode::Cluster(c) => (leaf.reflectance(), c.ctx.rho_vector[c.id as usize]),
         }
     }
+
+    fn unit_response(&self, leaf: &FaceNode<'a>) -> Option<(Rgb, [DVec3; 3])> {
+        // Every face sending B = 1 on every channel: a volume sends from its radiosity alone, a face's power
+        // vector is A n and a cluster's the sum of its faces', Σ A_i n_i.
+        Some(match leaf {
+            FaceNode::Volume(_) => (Rgb::ONE, [DVec3::ZERO; 3]),
+            FaceNode::Patch(p) => (Rgb::ONE, [p.normal * p.area; 3]),
+            FaceNode::Cluster(c) => (Rgb::ONE, [c.node().vector_area; 3]),
+        })
+    }
 }

@@ -4,6 +4,8 @@
 //! - at r itself (HSA91's per-link gather; cluster links), its contribution pushed to r's children;
 //! - at each input face below r (an oriented cluster receiver hands each face its own share, Smits, Arvo &
 //!   Greenberg 1994), then pushed within the face;
+//! - at the shallowest nodes below r that the transport resolves, or the input faces where none on the way
+//!   does ([`GatherAt::Descend`]), then pushed below;
 //! - at each leaf below r, with the kernel integrated over the leaf itself:
 //!   H_leaf = Σ_{(a←s), a ∋ leaf} V_as F_{leaf→s} B_s, F_{leaf→s} by the leaf's own Gauss points. The sources
 //!   on a leaf's path partition what its face sees, so the exact point-to-polygon factors sum to the point's
@@ -24,9 +26,10 @@
 //!
 //! Every evaluation below the receiver or the source is a kernel evaluation and is counted in the engine's
 //! form factors, so a gather that re-evaluates links pays for it in the statistics. Rows are rebuilt only for
-//! targets below a node whose links changed, and only the entries of the changed nodes' links are evaluated
-//! again; a link's source weights are evaluated again only when its receiver's links changed or a node below
-//! its source was split.
+//! targets below a node whose links changed, and only the entries of links made since the last build are
+//! evaluated: a refinement keeps a node's other links unchanged (a link is a pure function of its two ends),
+//! so their coefficients are found in the old row by source; a link's source weights are evaluated again
+//! only when its receiver's links changed or a node below its source was split.
 
 use rayon::prelude::*;
 
@@ -50,7 +53,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         &self,
         t: u32,
         old: &[RowEntry<T::Coefficient>],
-        distributes: &[bool],
+        below: &[Option<Vec<GatherAt>>],
+        reuse: &[bool],
     ) -> (Vec<RowEntry<T::Coefficient>>, u64) {
         let node = &self.nodes[t as usize];
         let leaf = self.children[t as usize].1 == 0;
@@ -64,6 +68,24 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 .copied()
                 .collect()
         };
+        // The old entries of changed nodes whose links can be told apart by source, by (node, source).
+        let mut kept: Vec<(u32, u32, T::Coefficient)> = old
+            .iter()
+            .filter(|(r, _, _)| (renew || self.dirty[*r as usize]) && reuse[*r as usize])
+            .filter_map(|&(r, k, c)| {
+                let s = *self.row_sources.get(r as usize)?.get(k as usize)?;
+                Some((r, s, c))
+            })
+            .collect();
+        kept.sort_unstable_by_key(|(r, s, _)| (*r, *s));
+        let find = |r: u32, s: u32| -> Option<T::Coefficient> {
+            if !reuse[r as usize] {
+                return None;
+            }
+            kept.binary_search_by_key(&(r, s), |(r, s, _)| (*r, *s))
+                .ok()
+                .map(|i| kept[i].2)
+        };
         let mut evaluations = 0;
         if renew {
             for (k, l) in self.links[t as usize].iter().enumerate() {
@@ -73,36 +95,56 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 let src = &self.nodes[l.source as usize];
                 let here = match self.kernel.gather_at(node, src) {
                     GatherAt::Receiver => true,
-                    GatherAt::Faces => within_face,
+                    GatherAt::Faces | GatherAt::Descend => within_face,
                     GatherAt::Leaves => leaf,
                 };
                 if here {
-                    row.push((t, k as u32, self.kernel.coefficient(node, src, l, true)));
+                    let c = find(t, l.source)
+                        .unwrap_or_else(|| self.kernel.coefficient(node, src, l, true));
+                    row.push((t, k as u32, c));
                 }
             }
         }
         let face_target = self.is_face_target(t);
-        if leaf || face_target {
+        // Nodes above the faces are targets of the descending links of their ancestors.
+        if leaf || face_target || !within_face {
+            // The ancestors passed so far: the nodes strictly between the current ancestor and t.
+            let mut between: Vec<u32> = Vec::new();
             let mut a = self.parent[t as usize];
             while a != NONE {
-                if distributes[a as usize] && (renew || self.dirty[a as usize]) {
+                if let Some(modes) = &below[a as usize]
+                    && (renew || self.dirty[a as usize])
+                {
                     let recv = &self.nodes[a as usize];
-                    for (k, l) in self.links[a as usize].iter().enumerate() {
+                    for ((k, l), mode) in self.links[a as usize].iter().enumerate().zip(modes) {
                         if l.overlap {
                             continue;
                         }
                         let src = &self.nodes[l.source as usize];
-                        let here = match self.kernel.gather_at(recv, src) {
+                        let here = match mode {
                             GatherAt::Receiver => false,
                             GatherAt::Faces => face_target && recv.face().is_none(),
                             GatherAt::Leaves => leaf,
+                            // The shallowest resolving node, or the face if none above it resolves.
+                            GatherAt::Descend => {
+                                recv.face().is_none()
+                                    && (face_target
+                                        || (!within_face && self.kernel.resolves(node, src, l)))
+                                    && !between.iter().any(|&b| {
+                                        self.kernel.resolves(&self.nodes[b as usize], src, l)
+                                    })
+                            }
                         };
                         if here {
-                            evaluations += 1;
-                            row.push((a, k as u32, self.kernel.coefficient(node, src, l, false)));
+                            let c = find(a, l.source).unwrap_or_else(|| {
+                                evaluations += 1;
+                                self.kernel.coefficient(node, src, l, false)
+                            });
+                            row.push((a, k as u32, c));
                         }
                     }
                 }
+                between.push(a);
                 a = self.parent[a as usize];
             }
         }
@@ -210,27 +252,55 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 stale[i] = true;
             }
         }
-        // Nodes with links evaluated below them.
-        let distributes: Vec<bool> = (0..n)
+        // Where each link is evaluated, for the nodes with links evaluated below them (asked once per
+        // rebuild, not at every target below).
+        let below: Vec<Option<Vec<GatherAt>>> = (0..n)
             .into_par_iter()
             .map(|a| {
-                self.links[a].iter().any(|l| {
-                    !l.overlap
-                        && self
-                            .kernel
+                let modes: Vec<GatherAt> = self.links[a]
+                    .iter()
+                    .map(|l| {
+                        self.kernel
                             .gather_at(&self.nodes[a], &self.nodes[l.source as usize])
-                            != GatherAt::Receiver
-                })
+                    })
+                    .collect();
+                let distributes = self.links[a]
+                    .iter()
+                    .zip(&modes)
+                    .any(|(l, m)| !l.overlap && *m != GatherAt::Receiver);
+                distributes.then_some(modes)
+            })
+            .collect();
+        // Changed nodes whose old and new links can be told apart by source (a node's links have distinct
+        // sources unless a transport links a pair twice; then its entries are evaluated again).
+        let distinct = |s: &mut Vec<u32>| {
+            s.sort_unstable();
+            s.windows(2).all(|w| w[0] != w[1])
+        };
+        let reuse: Vec<bool> = (0..n)
+            .into_par_iter()
+            .map(|a| {
+                let Some(prev) = self.row_sources.get(a) else {
+                    return false;
+                };
+                let mut now: Vec<u32> = self.links[a].iter().map(|l| l.source).collect();
+                !self.dirty[a] || (distinct(&mut prev.clone()) && distinct(&mut now))
             })
             .collect();
         let todo: Vec<u32> = (0..n as u32).filter(|&i| stale[i as usize]).collect();
         let built: Vec<(Vec<RowEntry<T::Coefficient>>, u64)> = todo
             .par_iter()
-            .map(|&t| self.build_row(t, &self.rows[t as usize], &distributes))
+            .map(|&t| self.build_row(t, &self.rows[t as usize], &below, &reuse))
             .collect();
         for (t, (row, evaluations)) in todo.into_iter().zip(built) {
             self.rows[t as usize] = row;
             self.form_factors += evaluations;
+        }
+        self.row_sources.resize(n, Vec::new());
+        for a in 0..n {
+            if self.dirty[a] {
+                self.row_sources[a] = self.links[a].iter().map(|l| l.source).collect();
+            }
         }
         self.dirty.iter_mut().for_each(|d| *d = false);
     }

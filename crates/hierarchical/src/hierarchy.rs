@@ -62,6 +62,9 @@ where
     pub(crate) source_rows: Vec<Vec<Vec<SourceWeight>>>,
     /// Nodes split since the source rows were last built.
     pub(crate) split_since: Vec<bool>,
+    /// Per node, the sources of its links when the rows were last built (aligned with the link indices in
+    /// the row entries then), so that a rebuild finds the coefficients of links that were kept.
+    pub(crate) row_sources: Vec<Vec<u32>>,
     pub(crate) roots: Vec<u32>,
     /// Per root: whether its initial links as a source exist yet (lazy linking).
     pub(crate) linked: Vec<bool>,
@@ -121,6 +124,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             dirty: Vec::with_capacity(n),
             source_rows: Vec::with_capacity(n),
             split_since: Vec::with_capacity(n),
+            row_sources: Vec::new(),
             roots: (0..n as u32).collect(),
             linked: vec![false; n],
             face_nodes: Vec::new(),
@@ -304,6 +308,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + size_of::<T::Irradiance>();
         let links: usize = self.links.iter().map(|l| l.capacity()).sum();
         let rows: usize = self.rows.iter().map(|r| r.capacity()).sum();
+        let row_sources: usize = self.row_sources.iter().map(|s| s.capacity()).sum();
         let (source_links, source_entries) =
             self.source_rows
                 .iter()
@@ -318,6 +323,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + source_entries * size_of::<SourceWeight>()
             + self.face_nodes.capacity() * 4
             + links * size_of::<Link>()
+            + row_sources * 4
+            + self.row_sources.capacity() * size_of::<Vec<u32>>()
             + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
     }
 
@@ -383,6 +390,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
             i += 1;
         }
+        // The expanded nodes' radiosity and exitance as their leaves' (a node made before its children holds
+        // only what its own reflection of zero irradiance gives, which for a transport whose exitance sums
+        // its faces' is nothing): the first pass then sends what the leaves emit.
+        let (mut b, mut x) = (
+            std::mem::take(&mut self.radiosity),
+            std::mem::take(&mut self.exitance),
+        );
+        self.pull(&mut b, &mut x);
+        (self.radiosity, self.exitance) = (b, x);
         self.operator_changed();
         Ok(())
     }

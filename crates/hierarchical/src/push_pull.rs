@@ -212,20 +212,6 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
     }
 
-    /// The operator's response to the furnace state, for diagnostics and tests: `u`, every leaf's response to
-    /// a unit irradiance from all around (the transport's uniform response: B = ρ for a patch), pulled; and
-    /// `M u`, one gather/push-pull pass of it without emission. Per leaf, (M u)/u is the row sum of the
-    /// gathered kernel at unit radiosity: at most one in a closed scene, one where the transfer is exact.
-    /// `None` while links changed since the last solution pass (the gather rows are built by that pass).
-    pub fn furnace_response(&self) -> Option<(Vec<Rgb>, Vec<Rgb>)> {
-        if self.dirty.iter().any(|&d| d) {
-            return None;
-        }
-        let (u, ux) = self.uniform_field(|_| true);
-        let ((mu, _), _) = self.apply(&u, &ux, false);
-        Some((u, mu))
-    }
-
     /// The leaves' responses to a unit irradiance from all around (zero at leaves `keep` rejects), pulled.
     fn uniform_field(&self, keep: impl Fn(usize) -> bool) -> Field<T::Exitance> {
         let (mut u, mut ux): Field<T::Exitance> = (0..self.nodes.len())

@@ -75,6 +75,12 @@ pub enum GatherAt {
     Faces,
     /// At each leaf below the receiver, with the kernel integrated over the leaf (exact form-factor sums).
     Leaves,
+    /// At the shallowest nodes below the receiver that the transport resolves ([`Transport::resolves`]),
+    /// and at the input faces below where no node on the way does, then pushed below: a cluster receiver
+    /// whose faces cannot all take the link as one (a normal cone straddling its direction) hands it to its
+    /// sub-clusters, and faces are reached one by one only where even those straddle. With a transport that
+    /// resolves nothing, the same as [`GatherAt::Faces`].
+    Descend,
 }
 
 /// A node kind's light model: what a link transfers, how a receiver distributes what it gathers, how push and
@@ -99,8 +105,16 @@ pub trait Transport<N: NodeKind>: Sync {
     /// Where the link `recv ← src` is evaluated.
     fn gather_at(&self, recv: &N, src: &N) -> GatherAt;
 
+    /// Whether a [`GatherAt::Descend`] link from `src` is evaluated at `target`, a node strictly between the
+    /// link's receiver and the input faces below it, rather than further down. By default nothing is.
+    fn resolves(&self, target: &N, src: &N, link: &Link) -> bool {
+        let _ = (target, src, link);
+        false
+    }
+
     /// The link's coefficient at gather target `target`: the receiver itself (`at_receiver`, from what the
-    /// link already holds), or a face or leaf below it (a kernel evaluation, counted as a form factor).
+    /// link already holds), or a node, face or leaf below it (a kernel evaluation, counted as a form
+    /// factor).
     fn coefficient(&self, target: &N, src: &N, link: &Link, at_receiver: bool)
     -> Self::Coefficient;
 

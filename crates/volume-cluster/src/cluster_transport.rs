@@ -36,12 +36,25 @@ pub trait TransferMode: Sync + Send + Debug + Default {
     type Exitance: LinearState;
     /// A link's coefficient at a gather target.
     type Coefficient: Copy + Send + Sync + Debug;
-    /// Where the link from `src` to cluster `recv` is evaluated.
-    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt;
+    /// Where the link from `src` to cluster `recv` is evaluated: by default at `recv` if it resolves the link
+    /// ([`TransferMode::resolves`]), else below it where clusters do, or at the faces.
+    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
+        if Self::resolves(recv, src) {
+            GatherAt::Receiver
+        } else {
+            GatherAt::Descend
+        }
+    }
+    /// Whether cluster `target` (a link's receiver or a cluster below it) takes the link from `src` as a
+    /// whole (by default never: links reach the faces).
+    fn resolves(target: &ClusterNode<'_>, src: &ClusterNode<'_>) -> bool {
+        let _ = (target, src);
+        false
+    }
     /// A scalar coefficient (irradiance per unit flux) at a patch target.
     fn scalar(c: f64) -> Self::Coefficient;
-    /// The coefficient at cluster receiver `target`: link coefficient `g` = V/(π r²), direction `d` source →
-    /// receiver, centroid distance `r`.
+    /// The coefficient at cluster `target` (the link's receiver or a cluster below it): `g` = V/(π r²),
+    /// direction `d` from the source's centroid to the target's, centroid distance `r`.
     fn at_cluster(target: &ClusterNode<'_>, g: f64, d: DVec3, r: f64) -> Self::Coefficient;
     /// J_S(d) of cluster `src`.
     fn cluster_flux(
@@ -222,6 +235,10 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
         }
     }
 
+    fn resolves(&self, target: &ClusterNode<'a>, src: &ClusterNode<'a>, _link: &Link) -> bool {
+        matches!(target, ClusterNode::Cluster(_)) && M::resolves(target, src)
+    }
+
     fn coefficient(
         &self,
         target: &ClusterNode<'a>,
@@ -237,7 +254,15 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
         match target {
             ClusterNode::Cluster(_) => {
                 let (d, r2) = centroid_geometry(target.centroid(), src.centroid());
-                M::at_cluster(target, link.coefficient, d, r2.sqrt())
+                // Below the receiver, the link's visibility over the target's own distance.
+                let g = if at_receiver {
+                    link.coefficient
+                } else if r2 > 0.0 {
+                    link.visibility as f64 / (std::f64::consts::PI * r2)
+                } else {
+                    0.0
+                };
+                M::at_cluster(target, g, d, r2.sqrt())
             }
             ClusterNode::Patch(p) => {
                 // The point approximation averaged over the patch's Gauss points (the rule its patch links

@@ -20,15 +20,34 @@
 //! ## Transfers, side by side
 //! - `isotropic`: a cluster is a sphere of projected area A/4; O(1) per link. Biased: a flat cluster facing a
 //!   light receives a quarter of the truth, and a cluster's faces all get its mean irradiance.
-//! - `alpha`: a cluster source sums Σ A_i max(0, n_i·d) B_i over its faces at every pass; a cluster receiver
-//!   hands each face its own cosine share. O(faces) per link, every face below a cluster link touched each pass.
+//! - `alpha`: a cluster source sends Σ A_i max(0, n_i·d) B_i (P·d from its power vector where its normal
+//!   cone faces d, zero where it faces away, a sum over its faces only where it straddles d); a cluster
+//!   receiver hands each face its own share, evaluated at the face's own Gauss points, except below clusters
+//!   every face of which has the source behind its plane (nothing to hand). O(faces) per link on the
+//!   receiving side: every face below a cluster link it faces is touched each pass.
 //! - `directional`: a cluster source every face of which faces d sends P·d (P = Σ A_i B_i n_i), one that
 //!   straddles d the order-2 spherical-harmonic estimate of J; a receiving cluster every face of which faces
 //!   the source gathers the link's irradiance field (value and gradient at its centroid, pushed to its
-//!   faces), links behind every face carry nothing, and only links that straddle its faces are evaluated
-//!   face by face ([`normal_cone`]). O(1) per link but for straddling receivers.
+//!   faces), links behind every face carry nothing, and a link that straddles its faces descends to the
+//!   sub-clusters it does not straddle, reaching faces one by one only along the line where the surface
+//!   turns away ([`normal_cone`]). O(1) per link but for straddling receivers.
 //!
 //! ## Cost
+//! Measured side by side (release, `radlab solve "builtin:concentric-spheres?faces=K" --method volume-cluster
+//! --set transfer=T --set reconstruction=constant --threads 1`, CPU seconds of the solve, the two builds
+//! alternated on the 2-core machine loaded by other builds, 2026-11-30), before → after the normal-cone
+//! shortcuts, the descending gather and the row rebuild that evaluates only new links; K = 1e3 / 3e3 / 1e4 /
+//! 3e4:
+//! - directional: 5.60 / 13.9 / 53.1 / 238 s → 5.16 / 14.2 / 51.7 / 189 s; (face, link) and other kernel
+//!   evaluations 4.3 / 3.3 / 23.6 / 168 M → 3.1 / 2.2 / 7.9 / 26 M; memory held at 3e4 3.2 → 1.8 GiB;
+//! - α: 6.58 / 13.6 / 75.4 s → 5.09 / 13.7 / 73.1 / 438 s; evaluations 5.6 / 17.2 / 190 M → 3.4 / 6.5 / 56 /
+//!   441 M (3e4 with `memory_budget_mib = 16384`: 6.1 GiB held; the default 4096 stops it; not run before
+//!   the change, whose rows would not have fitted the machine). Receivers every face of which faces the
+//!   source stay face by face, and their evaluations grow as k^1.9 from 1e4 to 3e4 (time k^1.6): the α
+//!   target (slope ≤ 1.2) is not met by the exact transfer;
+//! - links 0.40 / 1.22 / 4.23 / 13.0 M (slope 1.03) at 16 visibility rays each: the rays are 43–48% of the
+//!   solve at 1e4 and, with the links, set the time slope below 1e4; above it the straddling receivers'
+//!   face-by-face evaluations did (directional 1.37 from 1e4 to 3e4 before, 1.18 after).
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`
 //! rays per link between points on the two ends' faces.

@@ -16,15 +16,21 @@
 //! over such links of V J max(0, n·u_x)/(π r_x²) with no term clamped (Sillion 1995's oriented clusters with
 //! the irradiance-vector push of Willmott, Heckbert & Garland 1999), to second order in the cluster's size
 //! over r, where the face-by-face gather it replaces evaluated each face's own distance and direction. Links
-//! behind every face carry nothing; only straddling links are evaluated face by face (Smits, Arvo & Greenberg
-//! 1994's α gather). A flat or gently curved cluster straddles only links near its own plane.
+//! behind every face carry nothing. A straddling link descends: each child cluster takes the same test toward
+//! the source from its own centroid and gathers the link's field there (at its own distance, so to second order
+//! in its own size) if it does not straddle, and hands it further down if it does; only faces below clusters
+//! that straddle all the way down are evaluated one by one (Smits, Arvo & Greenberg 1994's α gather). A flat
+//! or gently curved cluster straddles only links near its own plane, and of a straddling cluster only the
+//! children along the line where its surface turns away from the source straddle again (on a smooth
+//! surface about √m faces of a cluster of m faces are evaluated instead of m; measured on the concentric
+//! spheres at 3e4 faces, 26 M kernel evaluations instead of 168 M).
 
 use std::f64::consts::FRAC_PI_2;
 
 use std::fmt::Debug;
 
 use glam::{DMat3, DVec3};
-use radlab_hierarchical::{GatherAt, LinearState, NodeKind, NodeView};
+use radlab_hierarchical::{LinearState, NodeKind, NodeView};
 use radlab_scene::Rgb;
 
 use crate::cluster_node::ClusterNode;
@@ -67,6 +73,13 @@ impl NormalCone {
         let axis = sum.normalize();
         let half_angle = normals.map(|(_, n)| angle(axis, n)).fold(0.0, f64::max);
         Self { axis, half_angle }
+    }
+
+    /// Whether every normal n of the cone has n·u ≤ −`margin` for unit `u` (0 ≤ `margin` ≤ 1): the cone's
+    /// largest n·u, cos(max(0, φ − θ)), is at most −`margin`.
+    pub fn behind(&self, u: DVec3, margin: f64) -> bool {
+        let phi = angle(self.axis, u);
+        phi - self.half_angle >= FRAC_PI_2 + margin.clamp(0.0, 1.0).asin()
     }
 
     /// The side of unit direction `u`.
@@ -155,19 +168,10 @@ pub enum OrientedCoefficient {
     Field(DVec3, f64),
 }
 
-/// Where a link from `src` to cluster `recv` is gathered: at the cluster if every face below faces the
-/// source's centroid or every face faces away; else at each face. At any distance: the first-order field's
-/// error at a face is second order in R/r (the cluster's bounding radius over the distance), about
-/// 2 (R/r)² of its value (a plate facing a source square on: (1 + δ²/r²)^(−2) ≈ 1 − 2δ²/r², the
-/// first-order term vanishing; measured 3.3% at R/r = 0.14), and cancels to first order on the mean over
-/// the cluster. (Gathered at the cluster only below R/r = 0.07, within 1% of a face-by-face gather, no link
-/// qualified on the concentric spheres up to k = 1e4.)
-fn oriented_gather_at(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
+/// Whether the normal cone of `recv` straddles the direction from its centroid to `src`'s.
+fn straddles(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> bool {
     let u = (src.centroid() - recv.centroid()).normalize_or_zero();
-    match cone_of(recv).side(u) {
-        Side::Straddle => GatherAt::Faces,
-        Side::Front | Side::Back => GatherAt::Receiver,
-    }
+    cone_of(recv).side(u) == Side::Straddle
 }
 
 /// The source half of an oriented transfer: what a cluster sends toward d, from its exitance state. The
@@ -196,8 +200,16 @@ impl<S: OrientedSource> TransferMode for Oriented<S> {
     type Exitance = S::Exitance;
     type Coefficient = OrientedCoefficient;
 
-    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
-        oriented_gather_at(recv, src)
+    /// A cluster takes a link as a whole (its field, or nothing) if every face below it faces the source's
+    /// centroid or every face faces away; a straddling link descends to the clusters below that it does not
+    /// straddle ([`radlab_hierarchical::GatherAt::Descend`]), or to the faces. At any distance: the
+    /// first-order field's error at a face is second order in R/r (the cluster's bounding radius over the
+    /// distance), about 2 (R/r)² of its value (a plate facing a source square on: (1 + δ²/r²)^(−2) ≈
+    /// 1 − 2δ²/r², the first-order term vanishing; measured 3.3% at R/r = 0.14), and cancels to first order on
+    /// the mean over the cluster. (Gathered at the cluster only below R/r = 0.07, within 1% of a face-by-face
+    /// gather, no link qualified on the concentric spheres up to k = 1e4.)
+    fn resolves(target: &ClusterNode<'_>, src: &ClusterNode<'_>) -> bool {
+        !straddles(target, src)
     }
 
     fn scalar(c: f64) -> OrientedCoefficient {

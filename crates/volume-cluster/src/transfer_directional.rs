@@ -10,7 +10,8 @@
 //!   truncation (a single lobe peaks 6% high and leaks 9% of its peak sideways), but bounded and O(1).
 //! - Receiver: the oriented receiver of the normal cones: a link every face below the receiving cluster faces
 //!   adds V J u/(π r²) to its irradiance vector (u toward the source; exact, faces take n·E at push), a link
-//!   every face turns away from carries nothing, and a straddling link is evaluated at each face below.
+//!   every face turns away from carries nothing, and a straddling link descends to the clusters below that
+//!   it does not straddle, reaching faces one by one only where it straddles down to them.
 //!
 //! Why not spherical harmonics on the receiver side too (what this transfer did first): a face takes the
 //! order-2 clamped cosine of every link into its cluster, including links from behind its own plane (other
