@@ -19,7 +19,7 @@ for m in "${methods[@]}"; do
   for r in $(seq "$rounds"); do
     for t in 1 2; do
       line=$("$bin" --threads "$t" solve builtin:cornell --method "$m" --set reconstruction=constant \
-        --out "$out/$m-run-$t" 2>&1 | grep -m1 ' s wall')
+        --out "$out/$m-run-$t" 2>&1 | grep ' s wall')
       s=$(sed -E 's/.* ([0-9.]+) s wall.*/\1/' <<<"$line")
       echo "$s" >> "$out/$m-$t"
       echo "$m round $r threads $t: $s s (load $(cut -d' ' -f1 /proc/loadavg))"
