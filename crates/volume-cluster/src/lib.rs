@@ -48,6 +48,7 @@
 //! - links 0.40 / 1.22 / 4.23 / 13.0 M (slope 1.03) at 16 visibility rays each: the rays are 43–48% of the
 //!   solve at 1e4 and, with the links, set the time slope below 1e4; above it the straddling receivers'
 //!   face-by-face evaluations did (directional 1.37 from 1e4 to 3e4 before, 1.18 after).
+//!
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`
 //! rays per link between points on the two ends' faces.
