@@ -99,7 +99,9 @@ impl MethodParams for MatrixParams {
             ("max_iterations", "cap on iterations; default 100000"),
             (
                 "visibility",
-                "unoccluded | centre | jittered2x2 | jittered4x4 | jittered8x8 rays per element pair; default jittered4x4",
+                "unoccluded | centre | jittered2x2 | jittered4x4 | jittered8x8 rays per element pair; default jittered4x4; \
+                 the jittered settings also give each element its open share (128 rays: the part not sealed under \
+                 a touching panel)",
             ),
             (
                 "quadrature",

@@ -214,7 +214,8 @@ impl MethodParams for ProgressiveParams {
             (
                 "indirect_visibility",
                 "visibility for shots from patches that do not emit (interreflection), same choices \
-                 (default jittered2x2, 4 rays)",
+                 (default jittered2x2, 4 rays); when both settings are jittered, each element also gets its \
+                 open share (128 rays: the part not sealed under a touching panel)",
             ),
             (
                 "quadrature",
