@@ -12,9 +12,9 @@
 use glam::DVec3;
 use radlab_scene::{
     Accel, ElementMesh, FaceId, MethodParams, Reconstructor, Rgb, Scene, Solution, SolveError,
-    Solver, Stats, Step, default_element_size, gouraud::ElementValue, open_fraction::open_fraction,
+    Solver, Stats, Step, default_element_size, gouraud::ElementValue,
+    open_fraction::open_fractions,
 };
-use rayon::prelude::*;
 
 use crate::assembly::{self, Assembly, PairSettings};
 use crate::conjugate_gradient::ConjugateGradient;
@@ -354,32 +354,20 @@ impl Solver for MatrixSolver<'_> {
         match self.phase {
             Phase::OpenFractions => {
                 self.steps += 1;
-                let (scene, accel, seed) = (self.scene, self.accel, self.seed);
                 // Only area-sampled visibility carries an element's sealed share into its form factors;
                 // with one centre ray or none, each element is open or closed as a whole.
-                let sampled = self.params.visibility.is_area_sampled();
-                let found: Vec<(f64, u64)> = self
-                    .mesh
-                    .elements
-                    .par_iter()
-                    .enumerate()
-                    .map(|(i, e)| {
-                        if sampled {
-                            open_fraction(
-                                scene,
-                                accel,
-                                &e.polygon,
-                                e.face as FaceId,
-                                seed,
-                                i as u64,
-                            )
-                        } else {
-                            (1.0, 0)
-                        }
-                    })
-                    .collect();
-                self.open_rays = found.iter().map(|f| f.1).sum();
-                self.open = found.into_iter().map(|f| f.0).collect();
+                (self.open, self.open_rays) = if self.params.visibility.is_area_sampled() {
+                    open_fractions(
+                        self.scene,
+                        self.accel,
+                        &self.mesh.elements,
+                        |e| (&e.polygon, e.face as FaceId),
+                        self.seed,
+                        0,
+                    )
+                } else {
+                    (vec![1.0; self.mesh.len()], 0)
+                };
                 self.phase = Phase::Assembling;
                 Ok(Step::Continue)
             }

@@ -96,8 +96,6 @@ pub struct ProgressiveSolver<'a> {
     output: Output,
     /// Whether the elements' open shares have been estimated (the first step does it).
     open_estimated: bool,
-    /// Whether adaptive subdivision estimates its new elements' open shares (area-sampled visibility).
-    estimate_children_open: bool,
 }
 
 impl std::fmt::Debug for ProgressiveSolver<'_> {
@@ -165,7 +163,6 @@ impl<'a> ProgressiveSolver<'a> {
             stop: None,
             output: Output::new(params.reconstruction, seed),
             open_estimated: false,
-            estimate_children_open: false,
             params,
         };
         s.update_ambient();
@@ -275,6 +272,14 @@ impl<'a> ProgressiveSolver<'a> {
         &self.params
     }
 
+    /// Whether elements carry open shares ([`radlab_scene::open_fraction`]): only where both visibility
+    /// estimates sample the receiver's area does its sealed share enter the form factors; otherwise every open
+    /// share stays 1.
+    fn open_shares_apply(&self) -> bool {
+        self.kernel.visibility.is_area_sampled()
+            && self.kernel.indirect_visibility.is_area_sampled()
+    }
+
     /// Shoots once, if the stopping rule allows; returns whether it did.
     fn shoot_once(&mut self) -> bool {
         if let Some(reason) = self.check_stop() {
@@ -321,16 +326,11 @@ impl Solver for ProgressiveSolver<'_> {
         self.output.invalidate();
         self.steps += 1;
         if !self.open_estimated {
-            // Only where both visibility estimates sample the receiver's area does its sealed share enter
-            // the form factors ([`radlab_scene::open_fraction`]); otherwise every open share stays 1.
-            if self.kernel.visibility.is_area_sampled()
-                && self.kernel.indirect_visibility.is_area_sampled()
-            {
+            if self.open_shares_apply() {
                 self.work.rays +=
                     self.solution
                         .mesh
                         .estimate_open(self.scene, self.accel, self.kernel.seed);
-                self.estimate_children_open = true;
             }
             self.open_estimated = true;
         }
@@ -342,6 +342,7 @@ impl Solver for ProgressiveSolver<'_> {
             shot_any = true;
         }
         if shot_any && self.params.adaptive {
+            let estimate_open = self.open_shares_apply();
             let (split, w) = adaptive_subdivision::refine(
                 self.scene,
                 self.accel,
@@ -354,7 +355,7 @@ impl Solver for ProgressiveSolver<'_> {
                     threshold: self.params.adaptive_threshold,
                     min_element_size: self.lengths.min_element_size,
                     max_elements: self.max_elements,
-                    estimate_open: self.estimate_children_open,
+                    estimate_open,
                 },
             )?;
             self.elements_split += split as u64;
@@ -463,17 +464,13 @@ impl Solution for ProgressiveSolver<'_> {
                     .map(|k| k as usize)
             },
             || {
-                mesh.leaves
-                    .iter()
-                    .map(|&e| {
-                        let el = &mesh.elements[e as usize];
-                        let f = el.face as usize;
-                        ElementValue {
-                            face: f,
-                            polygon: el.polygon,
-                            radiosity: el.radiosity + sol.reflectance[f] * sol.ambient,
-                            open: el.open,
-                        }
+                self.elements()
+                    .into_iter()
+                    .map(|e| ElementValue {
+                        face: e.face,
+                        polygon: e.polygon,
+                        radiosity: e.radiosity + sol.reflectance[e.face] * sol.ambient,
+                        open: e.open,
                     })
                     .collect()
             },

@@ -16,8 +16,7 @@
 //! A_e, so an element half under a floor covering neither absorbs nor sends the light its sealed half cannot
 //! receive. Where nothing is sealed every o_e is 1 and these are the plain area means.
 
-use radlab_scene::{Accel, Polygon, Rgb, Scene, SolveError, open_fraction::open_fraction};
-use rayon::prelude::*;
+use radlab_scene::{Accel, Polygon, Rgb, Scene, SolveError, open_fraction::open_fractions};
 
 /// A shooting patch.
 #[derive(Clone, Copy, Debug)]
@@ -224,24 +223,16 @@ impl Mesh {
         range: std::ops::Range<usize>,
     ) -> u64 {
         let first = range.start;
-        let found: Vec<(f64, u64)> = self.elements[range]
-            .par_iter()
-            .enumerate()
-            .map(|(k, e)| {
-                open_fraction(
-                    scene,
-                    accel,
-                    &e.polygon,
-                    e.face as usize,
-                    seed,
-                    (first + k) as u64,
-                )
-            })
-            .collect();
-        let mut rays = 0;
-        for (k, (o, r)) in found.into_iter().enumerate() {
+        let (open, rays) = open_fractions(
+            scene,
+            accel,
+            &self.elements[range],
+            |e| (&e.polygon, e.face as usize),
+            seed,
+            first as u64,
+        );
+        for (k, o) in open.into_iter().enumerate() {
             self.elements[first + k].open = o;
-            rays += r;
         }
         rays
     }

@@ -26,6 +26,7 @@
 use crate::polygon::Polygon;
 use crate::sampling::{self, mix64};
 use crate::{Accel, FaceId, Scene};
+use rayon::prelude::*;
 
 /// Points per side of the stratified grid (default 4: 16 points).
 pub const DEFAULT_OPEN_SIDE: u32 = 4;
@@ -76,6 +77,28 @@ pub fn open_fraction(
         open as f64 / (side * side) as f64
     };
     (o, cast)
+}
+
+/// The open fractions of `elements` (each given as its polygon and face by `part`), on rayon threads, element k
+/// keyed `first_key + k`, and the rays cast: the same values on any number of threads.
+pub fn open_fractions<T: Sync>(
+    scene: &Scene,
+    accel: &Accel,
+    elements: &[T],
+    part: impl Fn(&T) -> (&Polygon, FaceId) + Sync,
+    seed: u64,
+    first_key: u64,
+) -> (Vec<f64>, u64) {
+    let found: Vec<(f64, u64)> = elements
+        .par_iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let (polygon, face) = part(e);
+            open_fraction(scene, accel, polygon, face, seed, first_key + k as u64)
+        })
+        .collect();
+    let rays = found.iter().map(|f| f.1).sum();
+    (found.into_iter().map(|f| f.0).collect(), rays)
 }
 
 #[cfg(test)]
