@@ -68,8 +68,10 @@ pub const DEFAULT_INDIRECT_VISIBILITY: VisibilitySampling = VisibilitySampling::
 pub const NEAR_FIELD: f64 = 1.0;
 
 /// The near set of a near source: emitters, and the elements closer to its centroid than this multiple of its
-/// diameter.
-pub const NEAR_SET: f64 = 1.5;
+/// diameter. Off the distances of regular meshes (a square element's diameter times 1.5 is exactly the distance
+/// to the corner of an element one and a half cells away), so that rounding never decides membership and
+/// answers do not change with the scene's scale.
+pub const NEAR_SET: f64 = 1.55;
 /// The smallest share of a hemisphere the far part's radiosity is spread over (a guard against dividing by a
 /// vanishing remainder when the near set fills a centroid's view).
 const MIN_FAR_SHARE: f64 = 0.05;
