@@ -81,6 +81,7 @@ mod hierarchy;
 mod link;
 mod locate;
 mod node;
+mod open_share;
 mod oracle;
 pub mod output;
 mod params;

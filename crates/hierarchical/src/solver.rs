@@ -42,7 +42,8 @@ impl<'a> HierarchicalSolver<'a> {
             params.visibility,
             seed,
             params.gather,
-        );
+        )
+        .with_open_shares(scene);
         let output = SurfaceOutput::new(params.reconstruction, seed);
         let engine = Engine::new(roots, kernel, params, min_size)?;
         Ok(Self {

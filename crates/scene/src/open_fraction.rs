@@ -42,6 +42,22 @@ pub fn open_fraction(
     seed: u64,
     key: u64,
 ) -> (f64, u64) {
+    let (o, cast) = open_share(scene, accel, polygon, face, seed, key);
+    (if o == 0.0 { 1.0 } else { o }, cast)
+}
+
+/// The open share of `polygon` on `face` as measured, o ∈ [0, 1]: [`open_fraction`] without its convention
+/// for an element with no open point, which here is 0 (wholly sealed). For solvers that credit an element's
+/// received light to its open part by link rather than by element (hierarchical radiosity), where a sealed
+/// element simply takes no part.
+pub fn open_share(
+    scene: &Scene,
+    accel: &Accel,
+    polygon: &Polygon,
+    face: FaceId,
+    seed: u64,
+    key: u64,
+) -> (f64, u64) {
     let (side, rays) = (DEFAULT_OPEN_SIDE, DEFAULT_OPEN_RAYS);
     let n = polygon.normal();
     let mut r = sampling::rng(seed, mix64(key ^ 0x6f70_656e_6672_6163));
@@ -71,12 +87,7 @@ pub fn open_fraction(
             open += 1;
         }
     }
-    let o = if open == 0 {
-        1.0
-    } else {
-        open as f64 / (side * side) as f64
-    };
-    (o, cast)
+    (open as f64 / (side * side) as f64, cast)
 }
 
 /// The open fractions of `elements` (each given as its polygon and face by `part`), on rayon threads, element k
