@@ -1,7 +1,8 @@
 //! The simulation hierarchy and its links, generic over the node kind and its light model ([`Transport`]):
 //! a forest of nodes in one arena (a child is always created after its parent, so increasing ids visit parents
 //! first), links stored with their receivers, the radiosity of every node (leaves: the solution B = E + ρ H;
-//! inner nodes: the area mean of their children, Σ A_c B_c / A) and the transport's further exitance state,
+//! inner nodes: the area mean of their children, Σ A_c B_c / A; both over open parts where a leaf is partly
+//! sealed, [`crate::open_share`]) and the transport's further exitance state,
 //! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows ([`crate::gather_rows`]),
 //! solution ([`crate::push_pull`]) and the schedules ([`crate::schedule`]) are methods of [`Engine`].
 

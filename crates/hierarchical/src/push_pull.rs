@@ -10,6 +10,11 @@
 //! - pull: an inner node's radiosity is the area mean of its children's, B_p = Σ_c A_c B_c / A_p, so the
 //!   power a node sends is exactly the power of its leaves; the transport's exitance state adds up.
 //!
+//! Where some leaf is partly sealed (a transport's open shares, [`crate::open_share`]), radiosity and
+//! irradiance are held over open parts: sources weight their leaves by o_y A_y F_{y→r}, a link's delivery is
+//! divided by its receiver's open share, pull is the mean over open areas Σ o_c A_c B_c / Σ o_c A_c, and the
+//! sums below weight a leaf by o A.
+//!
 //! This is one Jacobi sweep B ← E + M B of the hierarchical operator M = ρ ⊙ push ∘ gather ∘ pull. Close to
 //! ρ = 1 a sweep shrinks the error's slowest mode (nearly uniform over the scene) only by about ρ, so each pass
 //! adds a one-dimensional coarse correction along u = ρ (per channel, on the leaves light has reached, so a
