@@ -202,7 +202,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.irradiance.push(h);
     }
 
-    /// Every node's total irradiance after the last pass's push (the transport's irradiance state).
+    /// Every node's total irradiance after the last pass's push (the transport's irradiance state); with
+    /// open shares, over the node's open part (a leaf absorbs o A (1 − ρ) H: [`Engine::open_shares`]).
     pub fn irradiance(&self) -> &[T::Irradiance] {
         &self.irradiance
     }
