@@ -1,7 +1,8 @@
 //! The simulation hierarchy and its links, generic over the node kind and its light model ([`Transport`]):
 //! a forest of nodes in one arena (a child is always created after its parent, so increasing ids visit parents
 //! first), links stored with their receivers, the radiosity of every node (leaves: the solution B = E + ρ H;
-//! inner nodes: the area mean of their children, Σ A_c B_c / A) and the transport's further exitance state,
+//! inner nodes: the area mean of their children, Σ A_c B_c / A; both over open parts where a leaf is partly
+//! sealed, [`crate::open_share`]) and the transport's further exitance state,
 //! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows ([`crate::gather_rows`]),
 //! solution ([`crate::push_pull`]) and the schedules ([`crate::schedule`]) are methods of [`Engine`].
 
@@ -49,6 +50,20 @@ where
     pub(crate) radiosity: Vec<Rgb>,
     /// The transport's exitance state per node (summed up the hierarchy).
     pub(crate) exitance: Vec<T::Exitance>,
+    /// Per node, the open share estimated while it was a leaf ([`Transport::open_share`]); NaN until then.
+    pub(crate) open_raw: Vec<f64>,
+    /// Per node, the open share the solution uses ([`Engine::open_shares`]): a leaf's estimate; above, the
+    /// area mean of its children's, Σ A_c o_c / A.
+    pub(crate) open: Vec<f64>,
+    /// Whether some leaf's estimated open share is below one (else every `open` is exactly 1, the next two
+    /// are empty and the solution is the plain area-mean one, bit for bit).
+    pub(crate) has_open: bool,
+    /// Per receiver, per link (aligned with `links`): 1/ō_l, ō_l the open share of the link's receiver as
+    /// the link's own coefficients weight it ([`crate::open_share`]), 0 where the receiver is sealed.
+    pub(crate) link_gain: Vec<Vec<f64>>,
+    /// Per node, the factor a leaf's gathered irradiance is capped by, min(1, 1/R'), R' its row sum with
+    /// the gains (1 above the leaves).
+    pub(crate) row_cap: Vec<f64>,
     /// Total irradiance per node after the last pass's push (what a node's new children inherit).
     pub(crate) irradiance: Vec<T::Irradiance>,
     /// Per gather target: every link evaluated there (its own, or an ancestor's that distributes to faces
@@ -119,6 +134,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             links: Vec::with_capacity(n),
             radiosity: Vec::with_capacity(n),
             exitance: Vec::with_capacity(n),
+            open_raw: Vec::with_capacity(n),
+            open: Vec::with_capacity(n),
+            has_open: false,
+            link_gain: Vec::new(),
+            row_cap: Vec::new(),
             irradiance: Vec::with_capacity(n),
             rows: Vec::with_capacity(n),
             dirty: Vec::with_capacity(n),
@@ -148,14 +168,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             form_factors: 0,
         };
         for r in roots {
-            engine.push_node(r, NONE, T::Irradiance::default());
+            engine.push_node(r, NONE, T::Irradiance::default(), 1.0);
         }
         Ok(engine)
     }
 
-    /// Appends a node that receives irradiance `h` (a root: none; a new child: what its parent had), with
-    /// the radiosity and exitance that irradiance gives it.
-    fn push_node(&mut self, node: N, parent: u32, h: T::Irradiance) {
+    /// Appends a node that receives irradiance `h` (a root: none; a new child: what its parent had) with
+    /// open share `open` until its own is estimated (a new child: its parent's), and the radiosity and
+    /// exitance that irradiance gives it.
+    fn push_node(&mut self, node: N, parent: u32, h: T::Irradiance, open: f64) {
         let id = self.nodes.len() as u32;
         if let Some(f) = node.face()
             && (parent == NONE || self.nodes[parent as usize].face().is_none())
@@ -167,6 +188,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
         let (b, x) = self.kernel.reflect(&node, &h, true);
         self.nodes.push(node);
+        self.open_raw.push(f64::NAN);
+        self.open.push(open);
         self.parent.push(parent);
         self.children.push((0, 0));
         self.links.push(Vec::new());
@@ -179,7 +202,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.irradiance.push(h);
     }
 
-    /// Every node's total irradiance after the last pass's push (the transport's irradiance state).
+    /// Every node's total irradiance after the last pass's push (the transport's irradiance state); with
+    /// open shares, over the node's open part (a leaf absorbs o A (1 − ρ) H: [`Engine::open_shares`]).
     pub fn irradiance(&self) -> &[T::Irradiance] {
         &self.irradiance
     }
@@ -196,6 +220,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// one.
     pub fn face_node(&self, f: FaceId) -> Option<u32> {
         self.face_nodes.get(f).copied().filter(|&i| i != NONE)
+    }
+
+    /// The open share o ∈ [0, 1] of every node: at a leaf, the transport's estimate of the share of its area
+    /// light can reach ([`Transport::open_share`]; 0 for a leaf wholly sealed); above, the area mean of its
+    /// children's. A leaf's radiosity and irradiance ([`Engine::radiosity`], [`Engine::irradiance`]) are
+    /// then those of its open part: it receives o A H and sends o A B ([`crate::open_share`]). Where nothing
+    /// is sealed (or the transport estimates nothing) every entry is exactly 1 and B is the area mean.
+    pub fn open_shares(&self) -> &[f64] {
+        &self.open
     }
 
     /// The transport's exitance state of every node.
@@ -304,11 +337,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + size_of::<Vec<Vec<SourceWeight>>>()
             + 2
             + 2 * size_of::<Rgb>()
+            + 2 * size_of::<f64>()
             + size_of::<T::Exitance>()
             + size_of::<T::Irradiance>();
         let links: usize = self.links.iter().map(|l| l.capacity()).sum();
         let rows: usize = self.rows.iter().map(|r| r.capacity()).sum();
         let row_sources: usize = self.row_sources.iter().map(|s| s.capacity()).sum();
+        let gains: usize = self.link_gain.iter().map(|g| g.capacity()).sum::<usize>()
+            + self.link_gain.capacity() * 3
+            + self.row_cap.capacity();
         let (source_links, source_entries) =
             self.source_rows
                 .iter()
@@ -324,6 +361,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + self.face_nodes.capacity() * 4
             + links * size_of::<Link>()
             + row_sources * 4
+            + gains * size_of::<f64>()
             + self.row_sources.capacity() * size_of::<Vec<u32>>()
             + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
     }
@@ -369,9 +407,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let kids = self.nodes[i as usize].split();
         let first = self.nodes.len() as u32;
         let h = self.irradiance[i as usize];
+        let open = self.open[i as usize];
         for k in kids {
             let hk = self.kernel.push(&self.nodes[i as usize], &k, &h);
-            self.push_node(k, i, hk);
+            self.push_node(k, i, hk, open);
         }
         self.children[i as usize] = (first, self.nodes.len() as u32 - first);
         self.dirty[i as usize] = true;

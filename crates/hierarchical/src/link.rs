@@ -24,7 +24,7 @@ use radlab_scene::{
     sampling,
 };
 
-use radlab_scene::Rgb;
+use radlab_scene::{Rgb, Scene, open_fraction::open_share};
 
 use crate::node::{NodeKind, Patch};
 use crate::params::Gather;
@@ -93,6 +93,8 @@ pub struct PatchKernel<'a> {
     visibility: VisibilitySampling,
     seed: u64,
     gather: Gather,
+    /// The scene whose leaves' open shares are estimated ([`PatchKernel::with_open_shares`]), if any.
+    open_shares: Option<&'a Scene>,
 }
 
 impl<'a> PatchKernel<'a> {
@@ -110,7 +112,18 @@ impl<'a> PatchKernel<'a> {
             visibility,
             seed,
             gather,
+            open_shares: None,
         }
+    }
+
+    /// The same kernel estimating every leaf's open share in `scene` (the scene `accel` was built from):
+    /// [`radlab_scene::open_fraction`], 16 stratified points × 8 cosine rays, the stream keyed by the leaf's
+    /// [`NodeKind::key`]. Only with area-sampled visibility: a link's visibility carries its source's sealed
+    /// share only when its rays start all over the source; with one centre ray or none an element is open or
+    /// closed as a whole, and the share stays 1.
+    pub fn with_open_shares(mut self, scene: &'a Scene) -> Self {
+        self.open_shares = self.visibility.is_area_sampled().then_some(scene);
+        self
     }
 
     /// The accelerator rays are cast through.
@@ -256,6 +269,23 @@ impl Transport<Patch> for PatchKernel<'_> {
         b[link.source as usize]
     }
 
+    fn open_share(&self, leaf: &Patch) -> Option<f64> {
+        let scene = self.open_shares?;
+        let (o, _rays) = open_share(
+            scene,
+            self.accel,
+            &leaf.polygon,
+            leaf.face,
+            self.seed,
+            leaf.key(),
+        );
+        Some(o)
+    }
+
+    fn coefficient_weight(&self, c: &f64) -> f64 {
+        *c
+    }
+
     fn deliver(&self, h: &mut Rgb, c: &f64, flux: Rgb) {
         *h += *c * flux;
     }
@@ -269,6 +299,10 @@ impl Transport<Patch> for PatchKernel<'_> {
 
     fn uniform_response(&self, leaf: &Patch) -> (Rgb, ()) {
         (leaf.reflectance, ())
+    }
+
+    fn unit_response(&self, _leaf: &Patch) -> Option<(Rgb, ())> {
+        Some((Rgb::ONE, ()))
     }
 }
 

@@ -123,17 +123,19 @@ pub fn locate<N: NodeKind, T: Transport<N>>(
     Some(radlab_scene::locate::descend(&Quadtrees(engine), i, point))
 }
 
-/// Every leaf that is a quadtree element, as the shared reconstructions see it.
+/// Every leaf that is a quadtree element, as the shared reconstructions see it, with its open share (a
+/// final gather samples the visibility of a source with o < 1 over its area); wholly sealed leaves (o = 0)
+/// send nothing and are left out.
 fn leaf_elements<N: NodeKind, T: Transport<N>>(engine: &Engine<N, T>) -> Vec<ElementValue> {
     (0..engine.nodes().len() as u32)
-        .filter(|&i| engine.is_leaf(i))
+        .filter(|&i| engine.is_leaf(i) && engine.open_shares()[i as usize] > 0.0)
         .filter_map(|i| {
             let p = engine.nodes()[i as usize].patch()?;
             Some(ElementValue {
                 face: p.face,
                 polygon: p.polygon,
                 radiosity: engine.radiosity()[i as usize],
-                open: 1.0,
+                open: engine.open_shares()[i as usize],
             })
         })
         .collect()

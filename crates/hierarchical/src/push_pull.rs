@@ -10,6 +10,11 @@
 //! - pull: an inner node's radiosity is the area mean of its children's, B_p = Σ_c A_c B_c / A_p, so the
 //!   power a node sends is exactly the power of its leaves; the transport's exitance state adds up.
 //!
+//! Where some leaf is partly sealed (a transport's open shares, [`crate::open_share`]), radiosity and
+//! irradiance are held over open parts: sources weight their leaves by o_y A_y F_{y→r}, a link's delivery is
+//! divided by its receiver's open share, pull is the mean over open areas Σ o_c A_c B_c / Σ o_c A_c, and the
+//! sums below weight a leaf by o A.
+//!
 //! This is one Jacobi sweep B ← E + M B of the hierarchical operator M = ρ ⊙ push ∘ gather ∘ pull. Close to
 //! ρ = 1 a sweep shrinks the error's slowest mode (nearly uniform over the scene) only by about ρ, so each pass
 //! adds a one-dimensional coarse correction along u = ρ (per channel, on the leaves light has reached, so a
@@ -48,9 +53,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .par_iter()
             .zip(&self.children)
             .zip(&h)
-            .map(|((node, c), h)| {
+            .enumerate()
+            .map(|(i, ((node, c), h))| {
                 if c.1 == 0 {
-                    self.kernel.reflect(node, h, with_emission)
+                    self.reflect_leaf(i, node, h, with_emission)
                 } else {
                     (Rgb::ZERO, T::Exitance::default())
                 }
@@ -75,6 +81,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     .map(|(k, l)| {
                         if l.overlap {
                             return Rgb::ZERO;
+                        }
+                        if self.has_open {
+                            return self.open_flux(&view, b, x, r, k, l);
                         }
                         match self.source_rows[r].get(k) {
                             Some(ws) if !ws.is_empty() => ws
@@ -133,7 +142,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The scalar irradiance of every leaf when every leaf sends B = 1 (`scaled`: with the row
     /// normalisation applied). A leaf's scalar irradiance is read through its reflection, H = B/ρ per channel
     /// (zero where ρ is zero: such a leaf reflects nothing, whatever it receives).
-    fn unit_gather(&self, scaled: bool) -> Vec<Rgb> {
+    pub(crate) fn unit_gather(&self, scaled: bool) -> Vec<Rgb> {
         let n = self.nodes.len();
         let mut u = vec![Rgb::ZERO; n];
         let mut ux = vec![T::Exitance::default(); n];
@@ -191,8 +200,12 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     }
 
     /// Sets every inner node to the area mean of its children's radiosity and the sum of their exitance
-    /// (children follow parents in id order).
+    /// (children follow parents in id order); with open shares, to the mean over their open areas
+    /// ([`Engine::pull_open`]).
     pub(crate) fn pull(&self, b: &mut [Rgb], x: &mut [T::Exitance]) {
+        if self.has_open {
+            return self.pull_open(b, x);
+        }
         for i in (0..self.nodes.len()).rev() {
             let (first, count) = self.children[i];
             if count == 0 {
@@ -227,12 +240,13 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         (u, ux)
     }
 
-    /// Area-weighted sum over leaves of a per-node vector (per channel), in node order.
+    /// Sum over leaves of a per-node radiosity times the area it is held over, o A (o the open share, 1
+    /// without open shares), per channel, in node order: the power it sends.
     fn leaf_sum(&self, v: &[Rgb]) -> Rgb {
         let mut s = Rgb::ZERO;
-        for ((node, c), x) in self.nodes.iter().zip(&self.children).zip(v) {
+        for (((node, c), x), o) in self.nodes.iter().zip(&self.children).zip(v).zip(&self.open) {
             if c.1 == 0 {
-                s += node.area() * *x;
+                s += node.area() * *o * *x;
             }
         }
         s
@@ -244,6 +258,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         if self.dirty.iter().any(|&d| d) {
             self.rebuild_rows();
             self.update_row_scale();
+            self.update_open_shares();
         } else if self.normalise_rows && self.row_scale.len() != self.nodes.len() {
             self.update_row_scale();
         }

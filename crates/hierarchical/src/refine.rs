@@ -133,12 +133,13 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .collect()
     }
 
-    /// The area-mean radiosity of the scene (max channel): the BF and variation oracles' scale.
+    /// The area-mean radiosity of the scene (max channel; each root's open-part radiosity over its open
+    /// area): the BF and variation oracles' scale.
     pub(crate) fn radiosity_scale(&self) -> f64 {
         let (mut sum, mut area) = (radlab_scene::Rgb::ZERO, 0.0);
         for &r in &self.roots {
             let a = self.nodes[r as usize].area();
-            sum += a * self.radiosity[r as usize];
+            sum += a * self.open[r as usize] * self.radiosity[r as usize];
             area += a;
         }
         if area > 0.0 {

@@ -42,7 +42,8 @@ impl<'a> HierarchicalSolver<'a> {
             params.visibility,
             seed,
             params.gather,
-        );
+        )
+        .with_open_shares(scene);
         let output = SurfaceOutput::new(params.reconstruction, seed);
         let engine = Engine::new(roots, kernel, params, min_size)?;
         Ok(Self {
@@ -64,7 +65,9 @@ impl<'a> HierarchicalSolver<'a> {
         self.scene
     }
 
-    /// Leaf radiosity with each leaf's face and area: (face, area, B) per leaf, in node order.
+    /// Leaf radiosity with each leaf's face and area: (face, area, B) per leaf, in node order. B is the
+    /// radiosity of the leaf's open part; the leaf sends o A B, o its open share ([`Engine::open_shares`],
+    /// 1 unless the leaf is partly sealed).
     pub fn leaves(&self) -> Vec<(FaceId, f64, Rgb)> {
         let e = &self.engine;
         (0..e.nodes().len() as u32)

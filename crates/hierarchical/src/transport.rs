@@ -15,7 +15,8 @@
 //!
 //! A link r ← s that sends its source's radiosity ([`Transport::sends_source_radiosity`]), from an inner
 //! node of patches to a patch, sends instead the mean of the radiosity of the leaves y below s weighted by
-//! how much each sees r (A_y F_{y→r}), not their area mean: the source side sends each leaf's own share, as
+//! how much each sees r (o_y A_y F_{y→r}, o_y the leaf's open share, 1 unless the transport estimates one:
+//! [`Transport::open_share`]), not their area mean: the source side sends each leaf's own share, as
 //! the receiver side gathers at each leaf.
 //!
 //! For patches h is irradiance, J the source's radiosity and c = V F (the gather H = Σ V F B); for a
@@ -137,6 +138,25 @@ pub trait Transport<N: NodeKind>: Sync {
     /// [`Link::clustered`].
     fn sends_source_radiosity(&self, link: &Link) -> bool {
         !link.clustered
+    }
+
+    /// The open share o ∈ [0, 1] of leaf `leaf`: the share of its area light can reach at all
+    /// ([`radlab_scene::open_fraction`]; part of a floor element under a covering sees only the covering's
+    /// back), or `None` (the default) when the transport does not estimate it, which is the same as 1. Where
+    /// one is below 1 the engine holds every leaf's radiosity and irradiance over its open part
+    /// ([`crate::open_share`]). Any rays it casts must go through the accelerator the solver counts rays
+    /// on, and its random stream must depend on the leaf only ([`NodeKind::key`]).
+    fn open_share(&self, leaf: &N) -> Option<f64> {
+        let _ = leaf;
+        None
+    }
+
+    /// The weight of a coefficient in a link's receiver-side open share ō_l = Σ o_t A_t c_t / Σ A_t c_t
+    /// ([`crate::open_share`]): its magnitude (a patch: V F). By default 1 (an area-weighted share). Read
+    /// only when [`Transport::open_share`] gives shares below 1.
+    fn coefficient_weight(&self, c: &Self::Coefficient) -> f64 {
+        let _ = c;
+        1.0
     }
 
     /// Adds to `h` what a target with coefficient `c` receives from a link sending `flux`.

@@ -431,6 +431,85 @@ fn emitted_power_is_absorbed_under_the_light_driven_default_schedule() {
     assert_power_balanced(&s, "defaults");
 }
 
+/// The closed unit room of radlab-scene's test scenes with a panel (ρ = 0.5, facing up) a millimetre above
+/// its floor over x, y ∈ [0.13, 0.71]: with elements no smaller than 0.25 the panel's edges cross floor
+/// leaves, which then lie partly under it, where they see only its back.
+fn covered_room() -> Scene {
+    radlab_scene::test_scenes::room("covered-room", &|b| {
+        let m = radlab_scene::test_scenes::material(b, "panel", 0.5, 0.0);
+        let (lo, hi, z) = (0.13, 0.71, 1e-3);
+        b.add_polygon_points(
+            &[
+                dvec3(lo, lo, z),
+                dvec3(hi, lo, z),
+                dvec3(hi, hi, z),
+                dvec3(lo, hi, z),
+            ],
+            m,
+            "panel",
+        )
+        .expect("panel");
+    })
+}
+
+/// Energy balance across a contact. A leaf that straddles the panel's edge receives only on its open share
+/// o; held as an area mean B̄ = o B and sent from its whole area, (1 − o) of what it sends would go into the
+/// panel's back (which absorbs it): the loss L = Σ (1 − o) o A B over the straddling leaves, computed from
+/// the same solution (it must be a visible share of the emitted power, or the scene tests nothing). Held over
+/// the open part (B, H) and sent with weights o A F, what is absorbed, Σ o A (1 − ρ) H, matches what is
+/// emitted, Σ o A E, up to the mismatch at each straddling leaf between its open share o (16 stratified
+/// probe points) and what its links' visibility (16 stratified rays each) lets through, V: the leaf's light
+/// reaches others in the ratio V/o, and its gains are capped where V/o > 1, so it gains or loses
+/// |V − o| A B. Each estimate is resolved to 1/16 of the leaf, |V − o| ≤ 2/16: the imbalance must be at
+/// most (2/16) Σ A B over the straddling leaves, plus the solver's remaining error. Without open shares it
+/// is L, which must exceed that bound.
+#[test]
+fn energy_balance_across_a_contact() {
+    let scene = covered_room();
+    let accel = Accel::new(&scene);
+    let p = HierarchicalParams {
+        tolerance: 1e-8,
+        min_element_size: Some(0.25),
+        ..leaf_params()
+    };
+    let s = solve(&scene, &accel, p);
+    let e = s.engine();
+    let (open, h, b) = (e.open_shares(), e.irradiance(), e.radiosity());
+    let (mut emitted, mut absorbed, mut loss, mut power, mut mismatch) =
+        (Rgb::ZERO, Rgb::ZERO, Rgb::ZERO, Rgb::ZERO, Rgb::ZERO);
+    let (mut straddling, mut sealed) = (0, 0);
+    for (i, n) in e.nodes().iter().enumerate() {
+        if !e.is_leaf(i as u32) {
+            continue;
+        }
+        let o = open[i];
+        emitted += o * n.area * n.emission;
+        absorbed += o * n.area * (Rgb::ONE - n.reflectance) * h[i];
+        power += o * n.area * b[i];
+        if o == 0.0 {
+            sealed += 1;
+        } else if o < 1.0 {
+            straddling += 1;
+            loss += (1.0 - o) * o * n.area * b[i];
+            mismatch += 2.0 / 16.0 * n.area * b[i];
+        }
+    }
+    let imbalance = (emitted - absorbed).abs();
+    let bound = mismatch + e.residual().expect("solved") * power;
+    println!(
+        "{straddling} straddling leaves, {sealed} sealed; emitted {emitted}, absorbed {absorbed}; \
+         imbalance {imbalance}, bound {bound}, loss without open shares {loss}"
+    );
+    assert!(straddling >= 4, "{straddling}");
+    for c in 0..3 {
+        assert!(loss[c] > bound[c], "loss {loss} within the bound {bound}");
+        assert!(
+            imbalance[c] <= bound[c],
+            "channel {c}: imbalance {imbalance} > the open shares' resolution {bound}"
+        );
+    }
+}
+
 #[test]
 fn schedules_reach_the_same_answer() {
     // With the geometric oracle and α = 1 every schedule builds the same links (rays are drawn per pair of

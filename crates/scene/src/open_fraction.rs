@@ -19,7 +19,8 @@
 //! The estimate: `side` × `side` stratified points on the element, each casting `rays` cosine-distributed
 //! rays ignoring its own face. A point is sealed when every ray hits the back of a face (one-sided faces
 //! absorb at their backs, so such a point receives nothing); a ray that escapes the scene or reaches a
-//! front face leaves the point open. o is the open share of the points, and an element with no open point is
+//! front face leaves the point open. o is the open share of the points ([`open_share`]); as an open fraction
+//! ([`open_fraction`], what matrix and progressive radiosity solve with) an element with no open point is
 //! left at o = 1 (it receives next to nothing, so there is nothing to correct). The random stream is a
 //! function of (seed, key) only.
 
@@ -33,8 +34,17 @@ pub const DEFAULT_OPEN_SIDE: u32 = 4;
 /// Probe rays per point (default 8).
 pub const DEFAULT_OPEN_RAYS: u32 = 8;
 
-/// The open fraction o ∈ (0, 1] of `polygon` on `face` (see the module documentation) and the rays it cast.
-pub fn open_fraction(
+/// The open fraction o ∈ (0, 1] of an element from its measured open share ([`open_share`]): an element
+/// with no open point is left at 1 (see the module documentation).
+pub fn open_fraction(share: f64) -> f64 {
+    if share == 0.0 { 1.0 } else { share }
+}
+
+/// The open share of `polygon` on `face` as measured, o ∈ [0, 1] (0: no probe point open), and the rays it
+/// cast. Solvers that hold an element's radiosity over its open part on effective areas o A (matrix,
+/// progressive) use [`open_fraction`] of it; hierarchical radiosity, which credits what a leaf receives to
+/// its open part link by link, lets a wholly sealed leaf take no part (o = 0).
+pub fn open_share(
     scene: &Scene,
     accel: &Accel,
     polygon: &Polygon,
@@ -71,12 +81,7 @@ pub fn open_fraction(
             open += 1;
         }
     }
-    let o = if open == 0 {
-        1.0
-    } else {
-        open as f64 / (side * side) as f64
-    };
-    (o, cast)
+    (open as f64 / (side * side) as f64, cast)
 }
 
 /// The open fractions of `elements` (each given as its polygon and face by `part`), on rayon threads, element k
@@ -94,7 +99,8 @@ pub fn open_fractions<T: Sync>(
         .enumerate()
         .map(|(k, e)| {
             let (polygon, face) = part(e);
-            open_fraction(scene, accel, polygon, face, seed, first_key + k as u64)
+            let (o, rays) = open_share(scene, accel, polygon, face, seed, first_key + k as u64);
+            (open_fraction(o), rays)
         })
         .collect();
     let rays = found.iter().map(|f| f.1).sum();
@@ -135,18 +141,15 @@ mod tests {
         let scene = covered_floor(0.5, 1e-3);
         let accel = Accel::new(&scene);
         let poly = scene.polygon(0);
-        let (o, rays) = open_fraction(&scene, &accel, &poly, 0, 7, 0);
+        let (o, rays) = open_share(&scene, &accel, &poly, 0, 7, 0);
         assert_eq!(o, 0.75);
         assert!(rays >= 16 && rays <= 16 * DEFAULT_OPEN_RAYS as u64);
         // The panel itself is open, and so is a floor nothing covers.
-        let (o, _) = open_fraction(&scene, &accel, &scene.polygon(1), 1, 7, 1);
+        let (o, _) = open_share(&scene, &accel, &scene.polygon(1), 1, 7, 1);
         assert_eq!(o, 1.0);
         let bare = covered_floor(-0.5, 1e-3);
         let accel = Accel::new(&bare);
-        assert_eq!(
-            open_fraction(&bare, &accel, &bare.polygon(0), 0, 7, 0).0,
-            1.0
-        );
+        assert_eq!(open_share(&bare, &accel, &bare.polygon(0), 0, 7, 0).0, 1.0);
     }
 
     #[test]
@@ -160,10 +163,17 @@ mod tests {
             .enumerate()
             .filter(|(_, e)| e.face == 0)
         {
-            let (o, _) = open_fraction(&scene, &accel, &e.polygon, 0, 3, i as u64);
-            // Elements [0, 0.5] and [0.5, 1] lie wholly under the panel (o = 1: nothing to correct), the
-            // rest wholly outside it.
-            assert_eq!(o, 1.0, "element at {:?}", e.centroid);
+            let (o, _) = open_share(&scene, &accel, &e.polygon, 0, 3, i as u64);
+            // Elements [0, 0.5] and [0.5, 1] lie wholly under the panel (share 0; fraction 1: nothing to
+            // correct), the rest wholly outside it.
+            let under = e.centroid.x < 1.0;
+            assert_eq!(
+                o,
+                if under { 0.0 } else { 1.0 },
+                "element at {:?}",
+                e.centroid
+            );
+            assert_eq!(open_fraction(o), 1.0);
         }
     }
 }
