@@ -115,8 +115,8 @@ impl MethodParams for MatrixParams {
                 "reconstruction",
                 "point answers from the element values: constant | gouraud (vertex-interpolated) | \
                  final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
-                 answering cost); default final-gather (Cornell box, 512 points: relative L1 3.0% against 12.3% constant and \
-                 12.8% gouraud at 110 mm elements, 1.4% / 6.4% / 5.6% at 55 mm; a gather costs rays per query, so \
+                 answering cost); default final-gather (Cornell box, 512 points: relative L1 1.8% against 11.0% constant and \
+                 11.1% gouraud at 110 mm elements, 0.9% / 6.2% / 4.6% at 55 mm; a gather costs rays per query, so \
                  images of large meshes are slow)",
             ),
         ]
