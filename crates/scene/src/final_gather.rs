@@ -39,10 +39,11 @@
 //! so it is gathered once, at c, and spread as a mean radiosity B_far over the share of the hemisphere S
 //! leaves: T(q) = Σ_{i∈S} F_{q→i} V B_i + (1 − Σ_{i∈S} F_{q→i}) B_far, B_far = Σ_{i∉S} F_{c→i} V B_i /
 //! (1 − Σ_{i∈S} F_{c→i}). The 64 values are then centred on the solution's own value of the element,
-//! B(q) = max(0, B_j + ρ_j (T(q) − T̄)), so the near field moves light within j (toward its lit side, away
-//! from a contact or a corner) and, but for that clamp, never changes its total. Unlike interpolating vertex values (Gouraud), each
-//! B(q) has its own visibility, so contact shadows stay sharp. The values depend only on the solution and the
-//! element, so each near element's are computed once, at its first near query, and kept.
+//! B(q) = max(0, B_j + ρ_j (T(q) − T̄)) with T̄ their mean over the quarters' areas, so the near field moves
+//! light within j (toward its lit side, away from a contact or a corner) and, but for that clamp, never
+//! changes its total. Unlike interpolating vertex values (Gouraud), each B(q) has its own visibility, so
+//! contact shadows stay sharp. The values depend only on the solution and the element, so each near element's
+//! are computed once, at its first near query, and kept.
 //!
 //! Cost per query: one kernel evaluation per source element in front of the point and 16 per near source, plus
 //! their rays; the first time an element is near some query, one gather at its centroid and 64 evaluations
@@ -227,11 +228,18 @@ impl FinalGather {
         let far_mean = far / (1.0 - f_near).max(MIN_FAR_SHARE);
         // T(q) at the 64 quarter centroids.
         let key = query_key(scene, src.face, c);
-        let mut values: Vec<(Polygon, [(DVec3, Rgb); 4])> = src
+        let subs: Vec<Polygon> = src
             .polygon
             .split4()
             .iter()
             .flat_map(|q| q.split4())
+            .collect();
+        let areas: Vec<[f64; 4]> = subs
+            .iter()
+            .map(|sub| sub.split4().map(|quarter| quarter.area()))
+            .collect();
+        let mut values: Vec<(Polygon, [(DVec3, Rgb); 4])> = subs
+            .into_iter()
             .map(|sub| {
                 let points = sub.split4().map(|quarter| {
                     let q = quarter.centroid();
@@ -259,11 +267,15 @@ impl FinalGather {
                 (sub, points)
             })
             .collect();
-        let mean = values
-            .iter()
-            .flat_map(|(_, p)| p.iter().map(|x| x.1))
-            .fold(Rgb::ZERO, |a, b| a + b)
-            / 64.0;
+        // Centred on the area mean over the quarters (equal areas but for a quad that is not a parallelogram).
+        let (mut mean, mut area) = (Rgb::ZERO, 0.0);
+        for ((_, points), quarters) in values.iter().zip(&areas) {
+            for ((_, t), a) in points.iter().zip(quarters) {
+                mean += *a * *t;
+                area += a;
+            }
+        }
+        let mean = if area > 0.0 { mean / area } else { Rgb::ZERO };
         let rho = scene.reflectance(src.face);
         for (_, points) in values.iter_mut() {
             for (_, b) in points.iter_mut() {
