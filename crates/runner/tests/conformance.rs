@@ -557,11 +557,11 @@ fn howell_case(m: &MethodInfo, scene: &Scene, h: f64, params: &toml::Table, seed
 /// Relative energy imbalance |absorbed − emitted| / emitted (worst channel) on a closed scene whose faces are
 /// all reflective, integrating over a 16 × 16 grid of cell centres per input face: exact for piecewise-constant
 /// elements that tile each face in 2^k × 2^k for k ≤ 4 (the table keeps every method's elements that coarse).
-/// The energy balance of a method's solution: absorbed power from its answers on a 16 × 16 grid per face
-/// against emitted power. Methods with a `reconstruction` parameter answer with their constant elements here,
-/// because every bound above is derived from the element solution: a final gather's near field departs from
-/// the element values on purpose (docs/methods.md, "Near field of the final gather"), so its answers need
-/// not sum to the solution's balance.
+///
+/// Methods with a `reconstruction` parameter answer with their constant elements here, because every bound in
+/// the settings table is derived from the element solution: a final gather's near field departs from the
+/// element values on purpose (docs/methods.md, "Near field of the final gather"), so its answers need not sum
+/// to the solution's balance.
 fn balance_case(m: &MethodInfo, scene: &Scene, s: &Settings, params: &toml::Table) -> Outcome {
     let mut params = params.clone();
     if (m.params)().iter().any(|p| p.name == "reconstruction") {
