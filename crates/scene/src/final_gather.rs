@@ -195,18 +195,14 @@ impl FinalGather {
         let reach = NEAR_SET * src.polygon.diameter();
         let (mut rays, mut kernels) = (0u64, 0u64);
         // The near set: every emitter, and the elements within reach of the centroid.
-        let near: Vec<usize> = (0..self.sources.len())
-            .filter(|&i| {
-                let (s, emits) = &self.sources[i];
-                s.face != src.face && (*emits || s.polygon.distance_to(c) < reach)
-            })
+        let is_near: Vec<bool> = self
+            .sources
+            .iter()
+            .map(|(s, emits)| s.face != src.face && (*emits || s.polygon.distance_to(c) < reach))
             .collect();
+        let near: Vec<usize> = (0..is_near.len()).filter(|&i| is_near[i]).collect();
         // The far part at the centroid, as a mean radiosity over the hemisphere the near set leaves.
         let (mut far, mut f_near) = (Rgb::ZERO, 0.0);
-        let mut is_near = vec![false; self.sources.len()];
-        for &i in &near {
-            is_near[i] = true;
-        }
         for (i, (s, _)) in self.sources.iter().enumerate() {
             if s.face == src.face {
                 continue;
