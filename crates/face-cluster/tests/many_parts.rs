@@ -160,11 +160,18 @@ fn many_parts_start_from_one_link() {
     assert!(worst <= 0.03, "worst relative error {worst}");
 }
 
-/// 4³ cubes in a room, ρ = 0.5: a furnace, area mean E/(1 − ρ) = 2. Measured (ε = 1e-3): 1.41 with one
-/// visibility ray per link, 1.65 with 16, 1.89 unoccluded, so most of the loss is visibility between closed
-/// parts (not yet diagnosed further; the rays ignore the ends' own surfaces).
+/// 4³ cubes in a room, ρ = 0.5: a furnace, area mean E/(1 − ρ) = 2. Fails: 1.69 at the defaults (ε = 1e-4, 16
+/// visibility rays per link); at ε = 1e-3 1.50 with one ray, 1.64 with 16, 1.90 unoccluded. The cubes are the
+/// loss: their faces' area mean is 1.06–1.29 against 2, and (one ray, ε = 1e-3) a cube face 0.4 from a wall, facing
+/// it, gathers nothing at all (B = E = 1). Each link to a whole cube is kept below ε although the cube's
+/// normal cone straddles every direction, and the cube gathers one irradiance vector, the sum of what comes
+/// from all sides, which cancels; as a source a closed cube's power vector Σ B_i A_i n_i is zero as well.
+/// Refusing every link whose curved end straddles it, whatever it carries, and splitting that end, gave 1.90
+/// (16 rays, ε = 1e-3, cube faces 1.74), but took the 10⁵-face bumpy sphere under its light from 61k to 11.6M
+/// links and 0.89 s to 178 s of solve, so it was not kept: a bound on what a receiver's straddling links
+/// cancel together, rather than each link against ε, is what is missing.
 #[test]
-#[ignore = "measurement: the furnace of many closed parts is far below E/(1 - rho); see the doc comment"]
+#[ignore = "known failure: closed parts linked whole lose what they gather (16% low); see the doc comment"]
 fn room_of_cubes_furnace() {
     let rho = 0.5;
     let scene = room_of_cubes(4, rho);
@@ -176,7 +183,7 @@ fn room_of_cubes_furnace() {
         scene.faces[10].normal
     );
     let accel = Accel::new(&scene);
-    let p = params(&[("epsilon", "0.001"), ("visibility", "centre")]);
+    let p = params(&[]);
     let mut s = FaceClusterSolver::new(&scene, &accel, p, 3).expect("solver");
     assert_eq!(s.context().tree.roots().len(), 65);
     solve_from_one_link(&mut s);
