@@ -18,7 +18,7 @@ use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
 use radlab_hierarchical::{
-    Engine, ErrorNorm, HierarchicalParams, NodeKind, PatchKernel, SurfaceOutput,
+    Engine, ErrorNorm, HierarchicalParams, LinearState, NodeKind, PatchKernel, SurfaceOutput,
 };
 use radlab_scene::gouraud::interpolate_corners;
 use radlab_scene::{
@@ -28,6 +28,7 @@ use radlab_scene::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::clamped_irradiance::ClampedIrradiance;
 use crate::face_node::{FaceContext, FaceNode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
@@ -302,64 +303,67 @@ impl<'a> FaceClusterSolver<'a> {
         Ok(s)
     }
 
-    /// The irradiance vector of input face `face`: at the deepest engine node holding it (the area mean over
-    /// its leaves where the refinement split the face into patches).
-    fn face_irradiance(&self, face: FaceId) -> [DVec3; 3] {
+    /// The gathered irradiance of input face `face`: at the deepest engine node holding it (the area mean
+    /// over its leaves where the refinement split the face into patches).
+    fn face_irradiance(&self, face: FaceId) -> ClampedIrradiance {
         let h = self.engine.irradiance();
         if let Some(root) = self.engine.face_node(face) {
-            let (mut sum, mut area) = ([DVec3::ZERO; 3], 0.0);
+            let (mut sum, mut area) = (ClampedIrradiance::ZERO, 0.0);
             let mut stack = vec![root];
             while let Some(i) = stack.pop() {
                 if self.engine.is_leaf(i) {
                     let a = self.engine.nodes()[i as usize].area();
-                    for k in 0..3 {
-                        sum[k] += h[i as usize][k] * a;
-                    }
+                    sum.add_scaled(Rgb::splat(a), &h[i as usize]);
                     area += a;
                 } else {
                     stack.extend(self.engine.children(i));
                 }
             }
             return if area > 0.0 {
-                sum.map(|v| v / area)
+                let mut mean = ClampedIrradiance::ZERO;
+                mean.add_scaled(Rgb::splat(1.0 / area), &sum);
+                mean
             } else {
                 h[root as usize]
             };
         }
         self.deepest_cluster(face)
-            .map_or([DVec3::ZERO; 3], |i| h[i as usize])
+            .map_or(ClampedIrradiance::ZERO, |i| h[i as usize])
     }
 
-    /// Per scene vertex: the area-weighted mean of its faces' unit normals (normalised) and of their
-    /// irradiance vectors. Linear in k: for output only.
+    /// Per scene vertex: the area-weighted mean of its faces' unit normals (normalised) and of their gathered
+    /// irradiance. Linear in k: for output only.
     fn vertex_fields(&self) -> &[VertexField] {
         self.vertex_fields.get_or_init(|| {
-            let faces: Vec<[DVec3; 3]> = (0..self.scene.face_count())
+            let faces: Vec<ClampedIrradiance> = (0..self.scene.face_count())
                 .into_par_iter()
                 .map(|f| self.face_irradiance(f))
                 .collect();
-            let mut sums = vec![(DVec3::ZERO, [DVec3::ZERO; 3], 0.0); self.scene.vertices.len()];
+            let mut sums =
+                vec![(DVec3::ZERO, ClampedIrradiance::ZERO, 0.0); self.scene.vertices.len()];
             for (f, e) in faces.iter().enumerate() {
                 let face = &self.scene.faces[f];
                 for &v in face.vertex_indices() {
                     let s = &mut sums[v as usize];
                     s.0 += face.normal * face.area;
-                    for (sum, e) in s.1.iter_mut().zip(e) {
-                        *sum += *e * face.area;
-                    }
+                    s.1.add_scaled(Rgb::splat(face.area), e);
                     s.2 += face.area;
                 }
             }
             sums.into_iter()
-                .map(|(n, e, a)| VertexField {
-                    normal: n.normalize_or_zero(),
-                    irradiance: if a > 0.0 { e.map(|v| v / a) } else { e },
+                .map(|(n, e, a)| {
+                    let mut irradiance = ClampedIrradiance::ZERO;
+                    irradiance.add_scaled(Rgb::splat(if a > 0.0 { 1.0 / a } else { 1.0 }), &e);
+                    VertexField {
+                        normal: n.normalize_or_zero(),
+                        irradiance,
+                    }
                 })
                 .collect()
         })
     }
 
-    /// Gouraud radiosity of `face` at `point`: B_v = E + ρ max(0, n_v·e_v) at the face's vertices, interpolated
+    /// Gouraud radiosity of `face` at `point`: B_v = E + ρ max(0, n_v·e_v + s_v) at the face's vertices, interpolated
     /// (bilinear in a quad's parameters, linear in a triangle's).
     fn gouraud_at(&self, face: FaceId, point: DVec3) -> Rgb {
         let fields = self.vertex_fields();
@@ -370,11 +374,7 @@ impl<'a> FaceClusterSolver<'a> {
             .zip(self.scene.faces[face].vertex_indices())
         {
             let VertexField { normal, irradiance } = &fields[v as usize];
-            *slot = Rgb::new(
-                em[0] + rho[0] * normal.dot(irradiance[0]).max(0.0),
-                em[1] + rho[1] * normal.dot(irradiance[1]).max(0.0),
-                em[2] + rho[2] * normal.dot(irradiance[2]).max(0.0),
-            );
+            *slot = em + rho * irradiance.at(*normal);
         }
         interpolate_corners(&self.scene.polygon(face), &values, point)
     }
@@ -385,8 +385,8 @@ impl<'a> FaceClusterSolver<'a> {
 struct VertexField {
     /// Area-weighted mean of the unit normals of the faces around the vertex, normalised.
     normal: DVec3,
-    /// Area-weighted mean of those faces' irradiance vectors, per channel.
-    irradiance: [DVec3; 3],
+    /// Area-weighted mean of those faces' gathered irradiance.
+    irradiance: ClampedIrradiance,
 }
 
 impl Solution for FaceClusterSolver<'_> {
@@ -413,11 +413,7 @@ impl Solution for FaceClusterSolver<'_> {
         let e = &self.engine.irradiance()[i as usize];
         let n = self.scene.faces[face].normal;
         let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
-        Rgb::new(
-            em[0] + rho[0] * n.dot(e[0]).max(0.0),
-            em[1] + rho[1] * n.dot(e[1]).max(0.0),
-            em[2] + rho[2] * n.dot(e[2]).max(0.0),
-        )
+        em + rho * e.at(n)
     }
 }
 

@@ -1,0 +1,212 @@
+//! What a face-cluster node gathers: an irradiance vector e per channel (Willmott, Heckbert & Garland 1999)
+//! and an isotropic irradiance s per channel, so that a face of unit normal n below the node receives
+//!
+//!   I(n) = max(0, n·e + s).
+//!
+//! A link brings irradiance g travelling along unit u, and a face of normal n takes g max(0, n·u). Where every
+//! face of the receiver faces the link (n·u ≥ 0 over the node's normal cone and the link's spread of
+//! directions) that is g n·u: the link adds g u to e, the exact vector transfer. Where the cone straddles
+//! the link, some faces see it from behind and n·u would count them negatively; summed over links from many
+//! directions those negative parts cancel what other links bring, so that a closed part linked whole
+//! gathered nothing from an even surrounding. Such a link instead adds the least-squares line a + b x of the
+//! clamped cosine max(0, x) over the range of cosines x = n·u its receiver's cone and spread allow: b g u to
+//! e and a g to s. Over the whole range [−1, 1] that line is 1/4 + x/2, the clamped cosine's projection on
+//! the constant and linear spherical harmonics (Ramamoorthi & Hanrahan 2001): exact on average over an even
+//! surrounding (a closed part in a furnace receives a quarter of g per unit area, Cauchy's mean projected
+//! area), and within g/4 at any face for one link. The same line gives what a curved source with faces
+//! turned away sends toward d: Σ B_i A_i max(0, n_i·d) ≈ a Σ B_i A_i + b p·d, p = Σ B_i A_i n_i.
+
+use glam::DVec3;
+use radlab_hierarchical::LinearState;
+use radlab_scene::Rgb;
+
+/// A node's gathered irradiance: the vector part and the isotropic part, per channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClampedIrradiance {
+    /// Irradiance vector e per channel.
+    pub vector: [DVec3; 3],
+    /// Isotropic irradiance s per channel: a face of any orientation receives s besides n·e.
+    pub isotropic: Rgb,
+}
+
+impl ClampedIrradiance {
+    /// Nothing gathered.
+    pub const ZERO: Self = Self {
+        vector: [DVec3::ZERO; 3],
+        isotropic: Rgb::ZERO,
+    };
+
+    /// The irradiance I(n) = max(0, n·e + s) of a face with unit normal `n`, per channel.
+    pub fn at(&self, n: DVec3) -> Rgb {
+        Rgb::new(
+            (n.dot(self.vector[0]) + self.isotropic[0]).max(0.0),
+            (n.dot(self.vector[1]) + self.isotropic[1]).max(0.0),
+            (n.dot(self.vector[2]) + self.isotropic[2]).max(0.0),
+        )
+    }
+}
+
+impl LinearState for ClampedIrradiance {
+    fn add_scaled(&mut self, c: Rgb, x: &Self) {
+        self.vector.add_scaled(c, &x.vector);
+        self.isotropic += c * x.isotropic;
+    }
+}
+
+/// The least-squares line a + b x of max(0, x) over x uniform in a range of cosines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CosineFit {
+    /// Offset a.
+    pub offset: f64,
+    /// Slope b.
+    pub slope: f64,
+}
+
+impl CosineFit {
+    /// Exact where every cosine is non-negative: max(0, x) = x.
+    pub const FACING: Self = Self {
+        offset: 0.0,
+        slope: 1.0,
+    };
+
+    /// The fit over [lo, hi] (clamped to [−1, 1]): x itself when lo ≥ 0, zero when hi ≤ 0, otherwise the
+    /// solution of the normal equations [L, m₁; m₁, m₂] (a, b) = (h²/2, h³/3) with L = h − l,
+    /// m₁ = (h² − l²)/2, m₂ = (h³ − l³)/3.
+    pub fn over(lo: f64, hi: f64) -> Self {
+        let (l, h) = (lo.clamp(-1.0, 1.0), hi.clamp(-1.0, 1.0));
+        if l >= 0.0 {
+            return Self::FACING;
+        }
+        if h <= 0.0 || h <= l {
+            return Self {
+                offset: 0.0,
+                slope: 0.0,
+            };
+        }
+        let (m0, m1, m2) = (h - l, 0.5 * (h * h - l * l), (h * h * h - l * l * l) / 3.0);
+        let (f0, f1) = (0.5 * h * h, h * h * h / 3.0);
+        let det = m0 * m2 - m1 * m1;
+        Self {
+            offset: (f0 * m2 - f1 * m1) / det,
+            slope: (m0 * f1 - m1 * f0) / det,
+        }
+    }
+
+    /// What a link bringing irradiance `g` along unit `u` adds to e and s, per unit flux.
+    pub fn coefficient(self, u: DVec3, g: f64) -> LinkCoefficient {
+        LinkCoefficient {
+            vector: u * (self.slope * g),
+            isotropic: self.offset * g,
+        }
+    }
+
+    /// What a source with power vectors `p` (Σ B_i A_i n_i) and total exitance `w` (Σ B_i A_i) sends toward
+    /// unit `d`, per channel: max(0, a w + b p·d).
+    pub fn sent(self, p: &[DVec3; 3], w: Rgb, d: DVec3) -> Rgb {
+        let f = |k: usize| (self.offset * w[k] + self.slope * p[k].dot(d)).max(0.0);
+        Rgb::new(f(0), f(1), f(2))
+    }
+}
+
+/// A link's coefficient at its gather target, per unit flux: what it adds to e and to s.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LinkCoefficient {
+    /// Added to e per unit flux.
+    pub vector: DVec3,
+    /// Added to s per unit flux.
+    pub isotropic: f64,
+}
+
+impl LinkCoefficient {
+    /// A transfer every face of the target takes as n·v.
+    pub fn vector(v: DVec3) -> Self {
+        Self {
+            vector: v,
+            isotropic: 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Over the whole range the fit is 1/4 + x/2 (the spherical-harmonic projection); over a range of
+    /// non-negative cosines it is x.
+    #[test]
+    fn fit_over_the_whole_range_is_the_harmonic_projection() {
+        let f = CosineFit::over(-1.0, 1.0);
+        assert!(
+            (f.offset - 0.25).abs() < 1e-15 && (f.slope - 0.5).abs() < 1e-15,
+            "{f:?}"
+        );
+        assert_eq!(CosineFit::over(0.2, 0.9), CosineFit::FACING);
+        assert_eq!(CosineFit::over(-0.9, -0.1).slope, 0.0);
+    }
+
+    /// The fit is the least-squares line: its residual is orthogonal to 1 and x over the range (midpoint
+    /// quadrature with 200,000 cells, whose error is far below the 1e-9 asked).
+    #[test]
+    fn fit_residual_is_orthogonal_to_the_line() {
+        for (lo, hi) in [(-1.0, 1.0), (-0.3, 0.8), (-0.9, 0.1), (-0.05, 1.0)] {
+            let f = CosineFit::over(lo, hi);
+            let n = 200_000;
+            let dx = (hi - lo) / n as f64;
+            let (mut r0, mut r1) = (0.0, 0.0);
+            for i in 0..n {
+                let x: f64 = lo + (i as f64 + 0.5) * dx;
+                let r = x.max(0.0) - f.offset - f.slope * x;
+                r0 += r * dx;
+                r1 += r * x * dx;
+            }
+            assert!(r0.abs() < 1e-9 && r1.abs() < 1e-9, "{lo} {hi}: {r0} {r1}");
+        }
+    }
+
+    /// An even surrounding: links of equal g from the 2 × 3 axis directions and the 8 cube diagonals, each
+    /// delivered with the whole-range fit, give every face orientation the mean clamped cosine of those
+    /// directions up to the fit's error, and their mean over orientations exactly (a closed part absorbs what
+    /// it should). The vector form alone gives zero.
+    #[test]
+    fn an_even_surrounding_reaches_a_closed_part() {
+        let mut dirs = vec![
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ];
+        for k in 0..8 {
+            let s = |b: usize| if k & (1 << b) == 0 { 1.0 } else { -1.0 };
+            dirs.push(DVec3::new(s(0), s(1), s(2)).normalize());
+        }
+        let fit = CosineFit::over(-1.0, 1.0);
+        let mut h = ClampedIrradiance::ZERO;
+        for &u in &dirs {
+            let c = fit.coefficient(u, 1.0);
+            h.add_scaled(
+                Rgb::ONE,
+                &ClampedIrradiance {
+                    vector: [c.vector; 3],
+                    isotropic: Rgb::splat(c.isotropic),
+                },
+            );
+        }
+        // The six faces of a cube.
+        for n in [
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ] {
+            let exact: f64 = dirs.iter().map(|u| n.dot(*u).max(0.0)).sum();
+            let got = h.at(n).x;
+            assert!((got - 0.25 * dirs.len() as f64).abs() < 1e-12, "{got}");
+            // Within the fit's error of g/4 per link, and in fact much closer for so even a surrounding.
+            assert!((got - exact).abs() < 0.25 * exact, "{n}: {got} vs {exact}");
+        }
+    }
+}
