@@ -5,7 +5,8 @@
 use glam::dvec3;
 use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver, FaceNode};
 use radlab_scene::{
-    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin,
+    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, SolveError, Solver, Step,
+    builtin,
 };
 
 /// A unit floor (z = 0, facing up, ρ = 0.5) as `cells` × `cells` squares of two triangles each (or one quad
@@ -332,6 +333,27 @@ fn furnace_sphere_rows_sum_to_one() {
         worst = worst.max((r - 1.0).abs());
     }
     assert!(worst <= 1e-12, "a row sums to 1 ± {worst:.3e}");
+}
+
+/// A 192-face furnace sphere at ρ = 0.999 and the default ε: the curved clusters' point transfers sum rows a
+/// little above one (the centroid of a cap of the sphere's inside lies nearer the rest than its faces do), the
+/// gain ρ × row exceeds one, and the solution grows without bound, about 0.4% per pass: the solve must say so
+/// rather than stop at its step cap with B ~ 1e195 (as it did). At ε = 1e-5 the same sphere converges (4.6%
+/// high), at ε = 1e-6 within 1e-9 (refined to its faces).
+#[test]
+fn a_divergent_furnace_is_an_error() {
+    let scene = builtin("furnace-sphere?reflectance=0.999&tessellation=4").expect("scene");
+    let accel = Accel::new(&scene);
+    let mut s = FaceClusterSolver::new(&scene, &accel, params(&[("max_steps", "3000")]), 1)
+        .expect("solver");
+    let mut outcome = s.step();
+    while matches!(outcome, Ok(Step::Continue)) {
+        outcome = s.step();
+    }
+    match outcome {
+        Err(SolveError::Numerical(m)) => assert!(m.contains("diverges"), "{m}"),
+        other => panic!("{other:?} after {} steps", s.stats().steps),
+    }
 }
 
 /// A solver with Gouraud output at the `f` oracle and `epsilon`, solved.

@@ -103,6 +103,10 @@ where
     /// Number of lit leaves when the coarse mode was computed.
     pub(crate) coarse_support: usize,
     pub(crate) passes_since_change: u32,
+    /// Consecutive passes, under one operator, whose change was no smaller than the pass before's.
+    pub(crate) growing_passes: u32,
+    /// The power the last pass changed, Σ A |ΔB| over the leaves.
+    pub(crate) last_diff: Option<f64>,
     pub(crate) last_norm: Option<f64>,
     pub(crate) residual: Option<f64>,
     pub(crate) converged: bool,
@@ -161,6 +165,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             coarse_denominator: Rgb::ZERO,
             coarse_support: 0,
             passes_since_change: 0,
+            growing_passes: 0,
+            last_diff: None,
             last_norm: None,
             residual: None,
             converged: false,

@@ -321,10 +321,31 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     .into(),
             ));
         }
+        let step = if norm > 0.0 { diff / norm } else { 0.0 };
+        // A fixed operator whose gain exceeds one: each pass changes the solution (in power, Σ A |ΔB|) at
+        // least as much as the one before, and the solution grows without bound, slowly enough near ρ = 1 to
+        // stay finite for 10⁵ passes. (The relative change diff/norm shrinks either way.)
+        self.growing_passes = match self.last_diff {
+            Some(prev) if self.passes_since_change >= 1 && diff > 0.0 && diff >= prev => {
+                self.growing_passes + 1
+            }
+            _ => 0,
+        };
+        self.last_diff = Some(diff);
+        if self.growing_passes >= DIVERGING_PASSES {
+            self.radiosity = b;
+            return Err(SolveError::Numerical(format!(
+                "the hierarchical solution diverges: {DIVERGING_PASSES} passes in a row, with the links \
+                 unchanged, each changed it at least as much as the one before (relative change {step:.3e}, \
+                 solution norm {norm:.3e}), \
+                 so the discrete operator's gain exceeds one: its rows sum above 1/rho somewhere (close to \
+                 rho = 1 a small excess of the clusters' point transfers is enough); lower epsilon, or \
+                 lower the reflectance"
+            )));
+        }
         self.radiosity = next;
         self.exitance = next_x;
         self.irradiance = h;
-        let step = if norm > 0.0 { diff / norm } else { 0.0 };
         self.passes_since_change += 1;
         let estimate = match self.last_norm {
             Some(prev) if self.passes_since_change >= 2 => {
@@ -345,6 +366,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         Ok(estimate)
     }
 }
+
+/// Passes in a row, under one operator, each changing the solution at least as much as the one before, after
+/// which the iteration is declared divergent. A contraction's changes shrink by its gain every pass (by
+/// 0.999 per pass in a furnace at ρ = 0.999), so even one such pass is rare; fifty in a row is growth.
+pub(crate) const DIVERGING_PASSES: u32 = 50;
 
 /// b/ρ: the irradiance H behind a leaf's reflected b = ρ H, zero where ρ is zero.
 fn per_unit(b: f64, rho: f64) -> f64 {

@@ -277,6 +277,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     pub(crate) fn operator_changed(&mut self) {
         self.coarse_mu = None;
         self.passes_since_change = 0;
+        self.growing_passes = 0;
+        self.last_diff = None;
         self.last_norm = None;
         self.converged = false;
     }
