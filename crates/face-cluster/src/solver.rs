@@ -28,6 +28,9 @@ use radlab_scene::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use radlab_volume_cluster::RowNormalisation;
+use radlab_volume_cluster::enclosure::enclosures;
+
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::face_node::{FaceContext, FaceNode};
 use crate::vector_transport::VectorTransport;
@@ -54,6 +57,12 @@ pub struct FaceClusterSolveParams {
     /// crate reads and writes no file: the program that builds the solver (radlab's runner) does, and hands
     /// the hierarchy to [`FaceClusterSolver::with_tree`]. Default [`DEFAULT_CACHE_DIR`].
     pub cache_dir: String,
+    /// Whether the operator's rows are rescaled to one in a closed scene, as for volume clusters
+    /// ([`RowNormalisation`]). With `closed-scenes`, 16 rays from every input face find out whether the scene
+    /// is closed (radlab-volume-cluster's enclosure test): a pass over the k faces, the one part of this
+    /// method then linear in k. Default [`RowNormalisation::Off`].
+    #[serde(default)]
+    pub row_normalisation: RowNormalisation,
 }
 
 impl Default for FaceClusterSolveParams {
@@ -68,6 +77,7 @@ impl Default for FaceClusterSolveParams {
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
+            row_normalisation: RowNormalisation::Off,
         }
     }
 }
@@ -82,6 +92,13 @@ impl MethodParams for FaceClusterSolveParams {
             "cache_dir",
             "directory of cached face-cluster hierarchies, one file per mesh digest (relative to the working \
              directory); \"\" builds the hierarchy every run",
+        ));
+        d.push((
+            "row_normalisation",
+            "off (default: the rows are what the vector transport computes) | closed-scenes (16 rays from every \
+             face find whether the scene is closed, a pass linear in the faces; if it is, each leaf's row is \
+             rescaled to sum to one, as an enclosure's form factors do, and a closed furnace holds by \
+             construction)",
         ));
         d
     }
@@ -103,7 +120,10 @@ impl MethodParams for FaceClusterSolveParams {
                     _ => (k, v),
                 }
             })
-            .chain([("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}"))])
+            .chain([
+                ("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}")),
+                ("row_normalisation".to_string(), "\"off\"".to_string()),
+            ])
             .collect()
     }
 
@@ -125,11 +145,24 @@ impl MethodParams for FaceClusterSolveParams {
                 ));
             }
         };
+        let row_normalisation = match table.remove("row_normalisation") {
+            None => RowNormalisation::Off,
+            Some(v) => v.try_into().map_err(|e: toml::de::Error| {
+                SolveError::param(
+                    "row_normalisation",
+                    format!("{}; use closed-scenes or off", e.message()),
+                )
+            })?,
+        };
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
         let engine = HierarchicalParams::from_table(full)?;
-        Ok(Self { engine, cache_dir })
+        Ok(Self {
+            engine,
+            cache_dir,
+            row_normalisation,
+        })
     }
 }
 
@@ -216,6 +249,9 @@ impl<'a> FaceClusterSolver<'a> {
         let mut engine = Engine::new(vec![root], transport, p, min_size)?;
         engine.skip_initial_links();
         let before = accel.rays_cast();
+        if params.row_normalisation == RowNormalisation::ClosedScenes {
+            engine.normalise_closed_rows(enclosures(scene, accel, seed).closed);
+        }
         let top = engine.roots()[0];
         engine.add_link(top, top)?;
         let rays = accel.rays_cast().saturating_sub(before);
