@@ -163,20 +163,24 @@ mod tests {
         }
     }
 
-    /// An even surrounding: links of equal g from the 2 × 3 axis directions and the 8 cube diagonals, each
-    /// delivered with the whole-range fit, give every face orientation the mean clamped cosine of those
-    /// directions up to the fit's error, and their mean over orientations exactly (a closed part absorbs what
-    /// it should). The vector form alone gives zero.
+    /// The six axis directions.
+    const AXES: [DVec3; 6] = [
+        DVec3::X,
+        DVec3::NEG_X,
+        DVec3::Y,
+        DVec3::NEG_Y,
+        DVec3::Z,
+        DVec3::NEG_Z,
+    ];
+
+    /// An even surrounding: links of equal g = 1 from the six axis directions and the eight cube diagonals,
+    /// each delivered with the whole-range fit. Every face of a cube then gets 14/4 = 3.5 (the vector parts
+    /// cancel, the isotropic parts add), against its exact clamped sum 1 + 4/√3 = 3.31, within the fit's bound
+    /// of 1/4 per link; the mean of max(0, n·u) over all orientations n is 1/4 per link as well, so a closed
+    /// part absorbs what it should. The vector form alone gives every face zero.
     #[test]
     fn an_even_surrounding_reaches_a_closed_part() {
-        let mut dirs = vec![
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ];
+        let mut dirs = AXES.to_vec();
         for k in 0..8 {
             let s = |b: usize| if k & (1 << b) == 0 { 1.0 } else { -1.0 };
             dirs.push(DVec3::new(s(0), s(1), s(2)).normalize());
@@ -193,20 +197,12 @@ mod tests {
                 },
             );
         }
-        // The six faces of a cube.
-        for n in [
-            DVec3::X,
-            -DVec3::X,
-            DVec3::Y,
-            -DVec3::Y,
-            DVec3::Z,
-            -DVec3::Z,
-        ] {
+        for n in AXES {
             let exact: f64 = dirs.iter().map(|u| n.dot(*u).max(0.0)).sum();
+            assert!((exact - (1.0 + 4.0 / 3f64.sqrt())).abs() < 1e-12, "{exact}");
             let got = h.at(n).x;
-            assert!((got - 0.25 * dirs.len() as f64).abs() < 1e-12, "{got}");
-            // Within the fit's error of g/4 per link, and in fact much closer for so even a surrounding.
-            assert!((got - exact).abs() < 0.25 * exact, "{n}: {got} vs {exact}");
+            assert!((got - 3.5).abs() < 1e-12, "{n}: {got}");
+            assert!((got - exact).abs() <= 0.25 * dirs.len() as f64);
         }
     }
 }
