@@ -33,11 +33,11 @@
 //! F_RS ≤ min(1, A_S/A_R) (reciprocity), so the oracle splits them until the power they could carry is below
 //! ε (the light such kept links would carry is lost). Every point transfer is capped so that neither end's
 //! form factor exceeds one: g = min(V/(π r²), V/max(A_R, A_S)). A node whose two children face each other
-//! (each child's centroid in front of the other's mean plane: a concave node) has a self-link; it carries f B̄ along the node's cone axis with
-//! f = (1 − cos θ)/2, the share of its own power a spherical cap of half-angle θ sends to itself
-//! (A_cap/(4πR²), exact for the inside of a sphere); flat (θ < 1e-6 rad), convex and single-face nodes have
-//! none, and a node whose children are single faces refines its self-link into the faces' links (flat facets
-//! exchange more across their shared edge than the cap's share says).
+//! (each child's centroid in front of the other's mean plane: a concave node) has a self-link; it carries
+//! f B̄ along the node's cone axis with f = (1 − cos θ)/2, the share of its own power a spherical cap of
+//! half-angle θ sends to itself (A_cap/(4πR²), exact for the inside of a sphere); flat (θ < 1e-6 rad), convex
+//! and single-face nodes have none, and a node whose children are single faces refines its self-link into
+//! the faces' links (flat facets exchange more across their shared edge than the cap's share says).
 //! Two patches exchange light by the patch kernel of radlab-hierarchical (exact point-to-polygon factors). A
 //! near single-face source (a neighbour across a shared edge included) is evaluated at each leaf below its
 //! flat receiver, over a patch leaf's Gauss points: a leaf's row then sums exact factors at the same points,
