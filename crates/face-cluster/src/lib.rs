@@ -93,8 +93,13 @@
 //!   on the 10⁴-face one even at the radiosity norm with ε = 1e-3 (3.5M links), where volume clusters (α)
 //!   reach 1.2% and hierarchical radiosity 0.9%; the answers are 3–4% low at every brightness. Against
 //!   hierarchical radiosity on 2,000 faces the ground's total power is 3.1% low at ρ = 0.5 (3.3% with 1.7M
-//!   links) but 1.1% high at ρ = 0.01, so the loss is in the light the terrain sends onto itself. Not
-//!   diagnosed further.
+//!   links) but 1.1% high at ρ = 0.01, so the loss is in the light the terrain sends onto itself. A curved
+//!   node whose two children do not face each other (neither centroid in front of the other's plane: a ridge,
+//!   or a rough, nearly flat patch of ground) gets no self-link, so its children never exchange light, though
+//!   a heightfield's do. Refining such self-links instead (while their cap share could carry more than ε)
+//!   brought the 2,000-face total to +0.3%, but cost 15–45× (10⁵ faces: 0.45 s → 19.9 s, 57k → 636k links,
+//!   splitting faces along every boundary between touching children) and the 10⁵-face L1 went from 7.2% to
+//!   8.8%; not kept, not understood.
 //! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 2.5% low at the defaults and 1.1% low at
 //!   ε = 1e-5 (`room_of_cubes_furnace`). Before (2) it was 16% low: links to a whole cube are kept below ε
 //!   although its cone straddles every direction, and the vectors from opposite sides cancelled. Refusing
