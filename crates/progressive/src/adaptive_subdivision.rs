@@ -149,13 +149,14 @@ pub(crate) fn refine(
     let mut work = Work::default();
     loop {
         // Every step scans all pairs: on rayon threads (sorted after, so the same on any number of threads).
-        let elements = &mesh.elements;
+        let (elements, radiosity) = (&mesh.elements, &mesh.radiosity);
         let mut marked: Vec<u32> = pairs
             .par_iter()
             .with_min_len(1024)
             .flat_map_iter(|&(a, b)| {
                 let (ea, eb) = (&elements[a as usize], &elements[b as usize]);
-                let split = contrast(ea.radiosity, eb.radiosity) > r.threshold;
+                let split =
+                    contrast(radiosity[a as usize], radiosity[b as usize]) > r.threshold;
                 [(a, ea), (b, eb)]
                     .into_iter()
                     .filter(move |(_, el)| split && splittable(el, r.min_element_size))
@@ -205,7 +206,7 @@ pub(crate) fn refine(
             })
             .collect();
         for (k, (b, w)) in gathered.into_iter().enumerate() {
-            mesh.elements[first_new + k].radiosity = b;
+            mesh.radiosity[first_new + k] = b;
             work += w;
         }
         // Correct each parent's patch by the change of its mean radiosity over the open area, which the
@@ -214,10 +215,14 @@ pub(crate) fn refine(
             let parent = mesh.elements[e as usize];
             let c0 = parent.first_child as usize;
             let children = &mesh.elements[c0..c0 + 4];
-            let after: Rgb = children.iter().map(|c| c.open_area() * c.radiosity).sum();
+            let after: Rgb = children
+                .iter()
+                .zip(&mesh.radiosity[c0..c0 + 4])
+                .map(|(c, &b)| c.open_area() * b)
+                .sum();
             let same_open = children.iter().all(|c| c.open == parent.open);
             let patch = &mut mesh.patches[parent.patch as usize];
-            let d_sum = after - parent.open_area() * parent.radiosity;
+            let d_sum = after - parent.open_area() * mesh.radiosity[e as usize];
             let before = patch.unshot;
             if same_open {
                 // The children's areas sum to their parent's (up to rounding): the open area stays.

@@ -22,7 +22,7 @@ use crate::adaptive_subdivision::{self, Refinement};
 use crate::ambient;
 use crate::element_location::ElementLocator;
 use crate::params::{Overshoot, ProgressiveParams, Resolved};
-use crate::shooting::{self, Interreflection, Kernel, Work};
+use crate::shooting::{self, Interreflection, Kernel, Receipt, Work};
 use crate::substructuring::{BYTES_PER_ELEMENT, Mesh};
 
 /// Why the solver stopped.
@@ -65,7 +65,7 @@ impl Solution for ProgressiveSolution {
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         match self.locator.locate(&self.mesh, face, point) {
             Some(e) => {
-                self.mesh.elements[e as usize].radiosity + self.reflectance[face] * self.ambient
+                self.mesh.radiosity[e as usize] + self.reflectance[face] * self.ambient
             }
             None => Rgb::ZERO,
         }
@@ -86,7 +86,7 @@ pub struct ProgressiveSolver<'a> {
     weights: Rgb,
     interreflection: Rgb,
     overshooting: Interreflection,
-    scratch: Vec<(f64, Work)>,
+    scratch: Vec<Receipt>,
     max_elements: usize,
     steps: u64,
     shots: u64,
@@ -243,7 +243,7 @@ impl<'a> ProgressiveSolver<'a> {
                     face: el.face as usize,
                     polygon: el.polygon,
                     area: el.area,
-                    radiosity: el.radiosity,
+                    radiosity: mesh.radiosity[e as usize],
                     open: el.open,
                 }
             })
@@ -397,7 +397,7 @@ impl Solver for ProgressiveSolver<'_> {
                 + self.pairs.capacity() * 8
                 + self.has_shot.capacity()
                 + self.shot_patches.capacity() * 4
-                + self.scratch.capacity() * size_of::<(f64, Work)>()) as u64,
+                + self.scratch.capacity() * size_of::<Receipt>()) as u64,
             residual: Some(self.unshot_fraction()),
         }
     }
@@ -566,7 +566,7 @@ mod tests {
                 sum += ff * patch.shot;
             }
             let expect = scene.emission(f) + scene.reflectance(f) * sum;
-            let d = (expect - el.radiosity).abs().max_element();
+            let d = (expect - mesh.radiosity[e as usize]).abs().max_element();
             assert!(
                 d < 1e-12 * expect.max_element().max(1.0),
                 "element {e}: {d}"
