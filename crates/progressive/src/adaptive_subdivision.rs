@@ -102,14 +102,40 @@ fn update_pairs(
     }
     reprobe.sort_unstable();
     reprobe.dedup();
-    kept.par_extend(
-        reprobe
-            .par_iter()
-            .flat_map_iter(|&e| probe(scene, mesh, locator, e)),
-    );
-    kept.sort_unstable();
-    kept.dedup();
-    kept
+    let mut found: Vec<(u32, u32)> = reprobe
+        .par_iter()
+        .flat_map_iter(|&e| probe(scene, mesh, locator, e))
+        .collect();
+    found.sort_unstable();
+    found.dedup();
+    union_sorted(&kept, &found)
+}
+
+/// The union of two ascending lists without repeats, ascending and without repeats (a merge: the kept pairs
+/// are most of the list, and sorting them again would cost O(n log n) on every refinement).
+fn union_sorted<T: Ord + Copy>(a: &[T], b: &[T]) -> Vec<T> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut k) = (0, 0);
+    while let (Some(&x), Some(&y)) = (a.get(i), b.get(k)) {
+        match x.cmp(&y) {
+            std::cmp::Ordering::Less => {
+                out.push(x);
+                i += 1;
+            }
+            std::cmp::Ordering::Greater => {
+                out.push(y);
+                k += 1;
+            }
+            std::cmp::Ordering::Equal => {
+                out.push(x);
+                i += 1;
+                k += 1;
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[k..]);
+    out
 }
 
 /// Settings of a refinement pass.
@@ -155,8 +181,7 @@ pub(crate) fn refine(
             .with_min_len(1024)
             .flat_map_iter(|&(a, b)| {
                 let (ea, eb) = (&elements[a as usize], &elements[b as usize]);
-                let split =
-                    contrast(radiosity[a as usize], radiosity[b as usize]) > r.threshold;
+                let split = contrast(radiosity[a as usize], radiosity[b as usize]) > r.threshold;
                 [(a, ea), (b, eb)]
                     .into_iter()
                     .filter(move |(_, el)| split && splittable(el, r.min_element_size))
@@ -255,6 +280,21 @@ mod tests {
         assert_eq!(contrast(Rgb::ZERO, Rgb::ZERO), 0.0);
         // Scale-free: multiplying both by any factor keeps the contrast.
         assert!((contrast(1e-30 * a, 0.7e-30 * a) - contrast(a, 0.7 * a)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn union_of_sorted_lists_equals_sorting_both() {
+        // Against sort + dedup of the concatenation, on lists with shared items, empty lists and runs of
+        // either list beyond the other's end.
+        let lists: [&[u32]; 5] = [&[], &[1, 4, 9], &[0, 1, 2, 9, 10], &[4], &[11, 12]];
+        for a in lists {
+            for b in lists {
+                let mut expect = [a, b].concat();
+                expect.sort_unstable();
+                expect.dedup();
+                assert_eq!(union_sorted(a, b), expect, "{a:?} ∪ {b:?}");
+            }
+        }
     }
 
     #[test]

@@ -372,9 +372,14 @@ pub(crate) fn shoot(
     receipts.clear();
     receipts.resize(mesh.leaves.len(), Receipt::default());
     if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS {
-        runs(&mesh.leaves, &mut mesh.radiosity, receipts, mesh.leaves.len().max(1))
-            .into_iter()
-            .for_each(gather);
+        runs(
+            &mesh.leaves,
+            &mut mesh.radiosity,
+            receipts,
+            mesh.leaves.len().max(1),
+        )
+        .into_iter()
+        .for_each(gather);
     } else {
         runs(&mesh.leaves, &mut mesh.radiosity, receipts, RUN_LEN)
             .into_par_iter()

@@ -64,9 +64,7 @@ pub struct ProgressiveSolution {
 impl Solution for ProgressiveSolution {
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         match self.locator.locate(&self.mesh, face, point) {
-            Some(e) => {
-                self.mesh.radiosity[e as usize] + self.reflectance[face] * self.ambient
-            }
+            Some(e) => self.mesh.radiosity[e as usize] + self.reflectance[face] * self.ambient,
             None => Rgb::ZERO,
         }
     }

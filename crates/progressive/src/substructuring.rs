@@ -106,7 +106,8 @@ pub(crate) fn piece_count(poly: &Polygon, size: f64) -> f64 {
 
 /// Bytes held per element, for budgets and reports: the element and its radiosity, its leaf entry, its place in
 /// the face grid and its share of the neighbour pairs.
-pub(crate) const BYTES_PER_ELEMENT: f64 = (size_of::<Element>() + size_of::<Rgb>() + 4 + 8 + 4 * 8) as f64;
+pub(crate) const BYTES_PER_ELEMENT: f64 =
+    (size_of::<Element>() + size_of::<Rgb>() + 4 + 8 + 4 * 8) as f64;
 
 impl Mesh {
     /// Meshes every face into patches of `patch_size` and elements of `element_size`. Emitting faces start with
