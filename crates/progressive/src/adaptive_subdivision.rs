@@ -157,6 +157,29 @@ fn splittable(el: &Element, min_size: f64) -> bool {
     0.5 * el.polygon.max_edge() >= min_size * (1.0 - 1e-9)
 }
 
+/// Neighbour pairs per rayon task of the contrast scan.
+const SCAN_RUN: usize = 1024;
+
+/// Appends to `out` the elements to split among `pairs`: both of every pair whose contrast exceeds the
+/// threshold, each if it is splittable (unsorted, with repeats).
+fn marked_in(
+    pairs: &[(u32, u32)],
+    elements: &[Element],
+    radiosity: &[Rgb],
+    r: &Refinement,
+    out: &mut Vec<u32>,
+) {
+    for &(a, b) in pairs {
+        if contrast(radiosity[a as usize], radiosity[b as usize]) > r.threshold {
+            for e in [a, b] {
+                if splittable(&elements[e as usize], r.min_element_size) {
+                    out.push(e);
+                }
+            }
+        }
+    }
+}
+
 /// Splits leaves across contrasts above the threshold until none remain; new elements re-gather from every
 /// patch shot so far. `pairs` holds the neighbour pairs of the current leaves and is kept up to date.
 /// Returns the number of elements split and the form-factor work.
@@ -174,20 +197,22 @@ pub(crate) fn refine(
     let mut split_total = 0;
     let mut work = Work::default();
     loop {
-        // Every step scans all pairs: on rayon threads (sorted after, so the same on any number of threads).
+        // Every step scans all pairs: on rayon tasks when there are threads to share them (sorted after, so
+        // the same on any number of threads).
         let (elements, radiosity) = (&mesh.elements, &mesh.radiosity);
-        let mut marked: Vec<u32> = pairs
-            .par_iter()
-            .with_min_len(1024)
-            .flat_map_iter(|&(a, b)| {
-                let (ea, eb) = (&elements[a as usize], &elements[b as usize]);
-                let split = contrast(radiosity[a as usize], radiosity[b as usize]) > r.threshold;
-                [(a, ea), (b, eb)]
-                    .into_iter()
-                    .filter(move |(_, el)| split && splittable(el, r.min_element_size))
-                    .map(|(id, _)| id)
-            })
-            .collect();
+        let mut marked = Vec::new();
+        if rayon::current_num_threads() == 1 || pairs.len() <= SCAN_RUN {
+            marked_in(pairs, elements, radiosity, r, &mut marked);
+        } else {
+            marked = pairs
+                .par_chunks(SCAN_RUN)
+                .flat_map_iter(|run| {
+                    let mut out = Vec::new();
+                    marked_in(run, elements, radiosity, r, &mut out);
+                    out
+                })
+                .collect();
+        }
         marked.sort_unstable();
         marked.dedup();
         if marked.is_empty() {

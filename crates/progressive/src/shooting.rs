@@ -81,7 +81,8 @@ impl std::ops::AddAssign for Work {
     }
 }
 
-/// Receivers below this count are gathered on the calling thread (rayon's overhead would dominate).
+/// Receivers below this count are gathered on the calling thread (rayon's overhead would dominate); so are all
+/// receivers when rayon has one thread.
 const PARALLEL_MIN_RECEIVERS: usize = 256;
 
 /// Leaves per rayon task of a shot. Every task is its own job (no adaptive coarsening), so a thread that runs
@@ -371,7 +372,7 @@ pub(crate) fn shoot(
     };
     receipts.clear();
     receipts.resize(mesh.leaves.len(), Receipt::default());
-    if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS {
+    if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS || rayon::current_num_threads() == 1 {
         runs(
             &mesh.leaves,
             &mut mesh.radiosity,

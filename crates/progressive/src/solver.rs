@@ -317,7 +317,42 @@ impl<'a> ProgressiveSolver<'a> {
 }
 
 impl Solver for ProgressiveSolver<'_> {
+    /// One step, run on a rayon worker thread (`rayon::scope`; inline when called on one): the step's parallel
+    /// loops (a gather per shot, the contrast scan, re-gathers) then start from a pool thread, without handing
+    /// work from the caller's thread to the pool and waking it again for each loop.
     fn step(&mut self) -> Result<Step, SolveError> {
+        rayon::scope(|_| self.step_on_worker())
+    }
+
+    fn solution(&self) -> &dyn Solution {
+        match self.params.reconstruction {
+            Reconstruction::Constant => &self.solution,
+            _ => self,
+        }
+    }
+
+    fn stats(&self) -> Stats {
+        Stats {
+            steps: self.steps,
+            elements: self.element_count() as u64,
+            links: 0,
+            form_factors: self.work.form_factors,
+            rays: self.work.rays,
+            bytes: (self.solution.mesh.bytes()
+                + self.solution.locator.bytes()
+                + self.solution.reflectance.capacity() * size_of::<Rgb>()
+                + self.pairs.capacity() * 8
+                + self.has_shot.capacity()
+                + self.shot_patches.capacity() * 4
+                + self.scratch.capacity() * size_of::<Receipt>()) as u64,
+            residual: Some(self.unshot_fraction()),
+        }
+    }
+}
+
+impl ProgressiveSolver<'_> {
+    /// [`Solver::step`]'s work.
+    fn step_on_worker(&mut self) -> Result<Step, SolveError> {
         if self.stop.is_some() {
             return Ok(Step::Converged);
         }
@@ -373,31 +408,6 @@ impl Solver for ProgressiveSolver<'_> {
         } else {
             Step::Continue
         })
-    }
-
-    fn solution(&self) -> &dyn Solution {
-        match self.params.reconstruction {
-            Reconstruction::Constant => &self.solution,
-            _ => self,
-        }
-    }
-
-    fn stats(&self) -> Stats {
-        Stats {
-            steps: self.steps,
-            elements: self.element_count() as u64,
-            links: 0,
-            form_factors: self.work.form_factors,
-            rays: self.work.rays,
-            bytes: (self.solution.mesh.bytes()
-                + self.solution.locator.bytes()
-                + self.solution.reflectance.capacity() * size_of::<Rgb>()
-                + self.pairs.capacity() * 8
-                + self.has_shot.capacity()
-                + self.shot_patches.capacity() * 4
-                + self.scratch.capacity() * size_of::<Receipt>()) as u64,
-            residual: Some(self.unshot_fraction()),
-        }
     }
 }
 
