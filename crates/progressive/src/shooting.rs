@@ -259,49 +259,27 @@ pub(crate) fn unshot_fraction(patches: &[Patch], weights: Rgb) -> f64 {
     (unshot_power(patches) * weights).max_element()
 }
 
-/// What one shot gave one leaf element.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Receipt {
-    /// The work of its form factor.
-    pub work: Work,
-    /// Its gain, where F_{e→j} > 0.
-    pub gain: Option<Gain>,
-}
-
-/// A leaf's gain ΔB_e = ρ_e F_{e→j} s / o_e from one shot, as its patch and the shot's return book it.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Gain {
-    /// Its patch.
-    pub patch: u32,
-    /// ΔB_e o_e A_e / (o A)_p: its patch's unshot radiosity gained.
-    pub unshot: Rgb,
-    /// o_e A_e ΔB_e: the power it returns as unshot power.
-    pub returned: Rgb,
-    /// Whether ΔB_e ≠ 0 (light has reached its patch).
-    pub nonzero: bool,
-}
-
 /// A run of consecutive leaves on one rayon task: the leaves, and the radiosities of the elements they span
-/// (`first ..`, interior elements between leaves included) and their receipts, borrowed apart from every
+/// (`first ..`, interior elements between leaves included) and their factors, borrowed apart from every
 /// other run's.
 struct Run<'a> {
     leaves: &'a [u32],
     first: u32,
     radiosity: &'a mut [Rgb],
-    receipts: &'a mut [Receipt],
+    factors: &'a mut [f64],
 }
 
 /// Cuts `leaves` (ascending element indices) into runs of `len`, each with the disjoint part of `radiosity`
-/// (indexed by element) that its elements span and its part of `receipts` (indexed by leaf position).
+/// (indexed by element) that its elements span and its part of `factors` (indexed by leaf position).
 fn runs<'a>(
     leaves: &'a [u32],
     mut radiosity: &'a mut [Rgb],
-    receipts: &'a mut [Receipt],
+    factors: &'a mut [f64],
     len: usize,
 ) -> Vec<Run<'a>> {
     let mut out = Vec::with_capacity(leaves.len().div_ceil(len));
     let mut offset = 0;
-    for (leaves, receipts) in leaves.chunks(len).zip(receipts.chunks_mut(len)) {
+    for (leaves, factors) in leaves.chunks(len).zip(factors.chunks_mut(len)) {
         let (Some(&first), Some(&last)) = (leaves.first(), leaves.last()) else {
             continue;
         };
@@ -314,19 +292,26 @@ fn runs<'a>(
             leaves,
             first,
             radiosity: mine,
-            receipts,
+            factors,
         });
     }
     out
 }
 
+/// ΔB_e = ρ_e F s / o_e: the radiosity element `el` gains over its open part from a shot of `amount` with
+/// factor F = `f` (F was sampled from all of the element, its sealed points included).
+fn gain(scene: &Scene, el: &Element, amount: Rgb, f: f64) -> Rgb {
+    scene.reflectance(el.face as usize) * amount * f / el.open
+}
+
 /// Shoots radiosity `amount` from patch `j` to every leaf element (`amount` = its unshot radiosity for plain
-/// shooting). Returns the work and the power that came back as unshot power, Σ_e A_e ΔB_e. `receipts` is scratch
+/// shooting). Returns the work and the power that came back as unshot power, Σ_e A_e ΔB_e. `factors` is scratch
 /// space.
 ///
-/// Each leaf gathers its factor and adds its own gain on a rayon task (each element is written by exactly one
-/// task); the sums over leaves — each patch's unshot radiosity and the returned power — are then taken in leaf
-/// order on one thread, so they are the same for any thread count.
+/// Each leaf evaluates its factor and adds its own gain on a rayon task (each element is written by exactly one
+/// task, and only its factor goes back: 8 bytes a leaf crossing between cores); the sums over leaves — each
+/// patch's unshot radiosity and the returned power — are then taken in leaf order on one thread, so they are
+/// the same for any thread count.
 pub(crate) fn shoot(
     scene: &Scene,
     accel: &Accel,
@@ -334,69 +319,64 @@ pub(crate) fn shoot(
     mesh: &mut Mesh,
     j: usize,
     amount: Rgb,
-    receipts: &mut Vec<Receipt>,
+    factors: &mut Vec<f64>,
 ) -> (Work, Rgb) {
     let shooter = mesh.patches[j];
     mesh.patches[j].shot += amount;
     mesh.patches[j].unshot -= amount;
-    let (elements, patches) = (&mesh.elements, &mesh.patches);
-    let receive = |e: u32, radiosity: &mut Rgb| {
-        let el = &elements[e as usize];
-        let rho = scene.reflectance(el.face as usize);
-        if rho == Rgb::ZERO {
-            return Receipt::default();
-        }
-        let (f, work) = element_patch_factor(scene, accel, kernel, el, e, &shooter, j as u32);
-        if !(f > 0.0) {
-            return Receipt { work, gain: None };
-        }
-        // F was sampled from all of the element, its sealed points included: over its open part the radiosity
-        // gained is ρ F s / o.
-        let gain = rho * amount * f / el.open;
-        *radiosity += gain;
-        let patch = &patches[el.patch as usize];
-        Receipt {
-            work,
-            gain: Some(Gain {
-                patch: el.patch,
-                unshot: gain * (el.open_area() / patch.open_area),
-                returned: el.open_area() * gain,
-                nonzero: gain != Rgb::ZERO,
-            }),
-        }
-    };
+    let elements = &mesh.elements;
     let gather = |run: Run| {
-        for (&e, out) in run.leaves.iter().zip(run.receipts) {
-            *out = receive(e, &mut run.radiosity[(e - run.first) as usize]);
+        let mut work = Work::default();
+        for (&e, f_out) in run.leaves.iter().zip(run.factors) {
+            let el = &elements[e as usize];
+            if scene.reflectance(el.face as usize) == Rgb::ZERO {
+                *f_out = 0.0;
+                continue;
+            }
+            let (f, w) = element_patch_factor(scene, accel, kernel, el, e, &shooter, j as u32);
+            work += w;
+            *f_out = f;
+            if f > 0.0 {
+                run.radiosity[(e - run.first) as usize] += gain(scene, el, amount, f);
+            }
         }
+        work
     };
-    receipts.clear();
-    receipts.resize(mesh.leaves.len(), Receipt::default());
-    if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS || rayon::current_num_threads() == 1 {
+    factors.clear();
+    factors.resize(mesh.leaves.len(), 0.0);
+    let work = if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS || rayon::current_num_threads() == 1 {
         runs(
             &mesh.leaves,
             &mut mesh.radiosity,
-            receipts,
+            factors,
             mesh.leaves.len().max(1),
         )
         .into_iter()
-        .for_each(gather);
+        .map(gather)
+        .fold(Work::default(), |mut a, b| {
+            a += b;
+            a
+        })
     } else {
-        runs(&mesh.leaves, &mut mesh.radiosity, receipts, RUN_LEN)
+        runs(&mesh.leaves, &mut mesh.radiosity, factors, RUN_LEN)
             .into_par_iter()
             .with_max_len(1)
-            .for_each(gather);
-    }
+            .map(gather)
+            .reduce(Work::default, |mut a, b| {
+                a += b;
+                a
+            })
+    };
     // The sums in leaf order on one thread: the same for any thread count.
-    let mut work = Work::default();
     let mut returned = Rgb::ZERO;
-    for r in receipts.iter() {
-        work += r.work;
-        if let Some(g) = r.gain {
-            returned += g.returned;
-            let patch = &mut mesh.patches[g.patch as usize];
-            patch.unshot += g.unshot;
-            patch.lit |= g.nonzero;
+    for (&e, &f) in mesh.leaves.iter().zip(factors.iter()) {
+        if f > 0.0 {
+            let el = &mesh.elements[e as usize];
+            let gain = gain(scene, el, amount, f);
+            returned += el.open_area() * gain;
+            let patch = &mut mesh.patches[el.patch as usize];
+            patch.unshot += gain * (el.open_area() / patch.open_area);
+            patch.lit |= gain != Rgb::ZERO;
         }
     }
     (work, returned)

@@ -22,7 +22,7 @@ use crate::adaptive_subdivision::{self, Refinement};
 use crate::ambient;
 use crate::element_location::ElementLocator;
 use crate::params::{Overshoot, ProgressiveParams, Resolved};
-use crate::shooting::{self, Interreflection, Kernel, Receipt, Work};
+use crate::shooting::{self, Interreflection, Kernel, Work};
 use crate::substructuring::{BYTES_PER_ELEMENT, Mesh};
 
 /// Why the solver stopped.
@@ -84,7 +84,7 @@ pub struct ProgressiveSolver<'a> {
     weights: Rgb,
     interreflection: Rgb,
     overshooting: Interreflection,
-    scratch: Vec<Receipt>,
+    scratch: Vec<f64>,
     max_elements: usize,
     steps: u64,
     shots: u64,
@@ -344,7 +344,7 @@ impl Solver for ProgressiveSolver<'_> {
                 + self.pairs.capacity() * 8
                 + self.has_shot.capacity()
                 + self.shot_patches.capacity() * 4
-                + self.scratch.capacity() * size_of::<Receipt>()) as u64,
+                + self.scratch.capacity() * size_of::<f64>()) as u64,
             residual: Some(self.unshot_fraction()),
         }
     }
