@@ -180,9 +180,34 @@ fn marked_in(
     }
 }
 
+/// The elements to split among the neighbour `pairs` of the current leaves, at the current radiosities
+/// (unsorted, with repeats): on rayon tasks when there are threads to share them.
+pub(crate) fn scan(
+    pairs: &[(u32, u32)],
+    elements: &[Element],
+    radiosity: &[Rgb],
+    r: &Refinement,
+) -> Vec<u32> {
+    let mut marked = Vec::new();
+    if rayon::current_num_threads() == 1 || pairs.len() <= SCAN_RUN {
+        marked_in(pairs, elements, radiosity, r, &mut marked);
+    } else {
+        marked = pairs
+            .par_chunks(SCAN_RUN)
+            .flat_map_iter(|run| {
+                let mut out = Vec::new();
+                marked_in(run, elements, radiosity, r, &mut out);
+                out
+            })
+            .collect();
+    }
+    marked
+}
+
 /// Splits leaves across contrasts above the threshold until none remain; new elements re-gather from every
-/// patch shot so far. `pairs` holds the neighbour pairs of the current leaves and is kept up to date.
-/// Returns the number of elements split and the form-factor work.
+/// patch shot so far. `pairs` holds the neighbour pairs of the current leaves and is kept up to date;
+/// `scanned`, if given, is [`scan`] of the current mesh (taken alongside the last shot's sums). Returns the
+/// number of elements split and the form-factor work.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     scene: &Scene,
@@ -193,26 +218,16 @@ pub(crate) fn refine(
     pairs: &mut Vec<(u32, u32)>,
     shot_patches: &[u32],
     r: &Refinement,
+    mut scanned: Option<Vec<u32>>,
 ) -> Result<(usize, Work), SolveError> {
     let mut split_total = 0;
     let mut work = Work::default();
     loop {
-        // Every step scans all pairs: on rayon tasks when there are threads to share them (sorted after, so
-        // the same on any number of threads).
-        let (elements, radiosity) = (&mesh.elements, &mesh.radiosity);
-        let mut marked = Vec::new();
-        if rayon::current_num_threads() == 1 || pairs.len() <= SCAN_RUN {
-            marked_in(pairs, elements, radiosity, r, &mut marked);
-        } else {
-            marked = pairs
-                .par_chunks(SCAN_RUN)
-                .flat_map_iter(|run| {
-                    let mut out = Vec::new();
-                    marked_in(run, elements, radiosity, r, &mut out);
-                    out
-                })
-                .collect();
-        }
+        // Every step scans all pairs (sorted after, so the same on any number of threads).
+        let mut marked = match scanned.take() {
+            Some(m) => m,
+            None => scan(pairs, &mesh.elements, &mesh.radiosity, r),
+        };
         marked.sort_unstable();
         marked.dedup();
         if marked.is_empty() {

@@ -307,13 +307,11 @@ fn gain(scene: &Scene, el: &Element, amount: Rgb, f: f64) -> Rgb {
 }
 
 /// Shoots radiosity `amount` from patch `j` to every leaf element (`amount` = its unshot radiosity for plain
-/// shooting). Returns the work and the power that came back as unshot power, Σ_e A_e ΔB_e. `factors` is scratch
-/// space.
+/// shooting), books it on patch j and adds every leaf's gain to its radiosity; returns the work. The leaves'
+/// factors are left in `factors` for [`book`], which must follow before anything else reads the patches.
 ///
 /// Each leaf evaluates its factor and adds its own gain on a rayon task (each element is written by exactly one
-/// task, and only its factor goes back: 8 bytes a leaf crossing between cores); the sums over leaves — each
-/// patch's unshot radiosity and the returned power — are then taken in leaf order on one thread, so they are
-/// the same for any thread count.
+/// task, and only its factor goes back: 8 bytes a leaf crossing between cores).
 pub(crate) fn shoot(
     scene: &Scene,
     accel: &Accel,
@@ -322,7 +320,7 @@ pub(crate) fn shoot(
     j: usize,
     amount: Rgb,
     factors: &mut Vec<f64>,
-) -> (Work, Rgb) {
+) -> Work {
     let shooter = mesh.patches[j];
     mesh.patches[j].shot += amount;
     mesh.patches[j].unshot -= amount;
@@ -346,7 +344,7 @@ pub(crate) fn shoot(
     };
     factors.clear();
     factors.resize(mesh.leaves.len(), 0.0);
-    let work = if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS || rayon::current_num_threads() == 1 {
+    if mesh.leaves.len() < PARALLEL_MIN_RECEIVERS || rayon::current_num_threads() == 1 {
         runs(
             &mesh.leaves,
             &mut mesh.radiosity,
@@ -368,18 +366,30 @@ pub(crate) fn shoot(
                 a += b;
                 a
             })
-    };
-    // The sums in leaf order on one thread: the same for any thread count.
+    }
+}
+
+/// The rest of a shot of `amount` ([`shoot`]): adds each leaf's gain, from its factor in `factors`, to its
+/// patch's unshot radiosity, in leaf order on one thread (so the sums are the same for any thread count), and
+/// returns the power that came back as unshot power, Σ_e A_e ΔB_e.
+pub(crate) fn book(
+    scene: &Scene,
+    patches: &mut [Patch],
+    elements: &[Element],
+    leaves: &[u32],
+    factors: &[f64],
+    amount: Rgb,
+) -> Rgb {
     let mut returned = Rgb::ZERO;
-    for (&e, &f) in mesh.leaves.iter().zip(factors.iter()) {
+    for (&e, &f) in leaves.iter().zip(factors) {
         if f > 0.0 {
-            let el = &mesh.elements[e as usize];
+            let el = &elements[e as usize];
             let gain = gain(scene, el, amount, f);
             returned += el.open_area() * gain;
-            let patch = &mut mesh.patches[el.patch as usize];
+            let patch = &mut patches[el.patch as usize];
             patch.unshot += gain * (el.open_area() / patch.open_area);
             patch.lit |= gain != Rgb::ZERO;
         }
     }
-    (work, returned)
+    returned
 }

@@ -278,11 +278,23 @@ impl<'a> ProgressiveSolver<'a> {
             && self.kernel.indirect_visibility.is_area_sampled()
     }
 
-    /// Shoots once, if the stopping rule allows; returns whether it did.
-    fn shoot_once(&mut self) -> bool {
+    /// The settings of adaptive subdivision.
+    fn refinement(&self) -> Refinement {
+        Refinement {
+            threshold: self.params.adaptive_threshold,
+            min_element_size: self.lengths.min_element_size,
+            max_elements: self.max_elements,
+            estimate_open: self.open_shares_apply(),
+        }
+    }
+
+    /// Shoots once, if the stopping rule allows; returns whether it did, and with `scan`, the contrast scan of
+    /// adaptive subdivision after the shot ([`adaptive_subdivision::scan`]), taken on another rayon task while
+    /// this one sums the shot over the patches (the two read disjoint data).
+    fn shoot_once(&mut self, scan: bool) -> (bool, Option<Vec<u32>>) {
         if let Some(reason) = self.check_stop() {
             self.stop = Some(reason);
-            return false;
+            return (false, None);
         }
         let patches = &self.solution.mesh.patches;
         let ambient = match self.params.overshoot {
@@ -293,10 +305,10 @@ impl<'a> ProgressiveSolver<'a> {
             shooting::select_shooter(self.scene, patches, self.weights, ambient)
         else {
             self.stop = Some(StopReason::NothingToShoot);
-            return false;
+            return (false, None);
         };
         let sent = patches[j].open_area * amount;
-        let (w, returned) = shooting::shoot(
+        let w = shooting::shoot(
             self.scene,
             self.accel,
             &self.kernel,
@@ -305,6 +317,25 @@ impl<'a> ProgressiveSolver<'a> {
             amount,
             &mut self.scratch,
         );
+        let refinement = self.refinement();
+        let Mesh {
+            patches,
+            elements,
+            radiosity,
+            leaves,
+            ..
+        } = &mut self.solution.mesh;
+        let mut book =
+            || shooting::book(self.scene, patches, elements, leaves, &self.scratch, amount);
+        let (returned, scanned) = if scan {
+            let pairs = &self.pairs;
+            let (returned, marked) = rayon::join(book, || {
+                adaptive_subdivision::scan(pairs, elements, radiosity, &refinement)
+            });
+            (returned, Some(marked))
+        } else {
+            (book(), None)
+        };
         self.overshooting.record(sent, returned);
         self.work += w;
         if !self.has_shot[j] {
@@ -312,7 +343,7 @@ impl<'a> ProgressiveSolver<'a> {
             self.shot_patches.push(j as u32);
         }
         self.shots += 1;
-        true
+        (true, scanned)
     }
 }
 
@@ -368,14 +399,18 @@ impl ProgressiveSolver<'_> {
             self.open_estimated = true;
         }
         let mut shot_any = false;
-        for _ in 0..self.params.shots_per_step {
-            if !self.shoot_once() {
+        let mut scanned = None;
+        for k in 1..=self.params.shots_per_step {
+            let last = k == self.params.shots_per_step;
+            let (shot, s) = self.shoot_once(last && self.params.adaptive);
+            if !shot {
                 break;
             }
             shot_any = true;
+            scanned = s;
         }
         if shot_any && self.params.adaptive {
-            let estimate_open = self.open_shares_apply();
+            let refinement = self.refinement();
             let (split, w) = adaptive_subdivision::refine(
                 self.scene,
                 self.accel,
@@ -384,12 +419,8 @@ impl ProgressiveSolver<'_> {
                 &self.solution.locator,
                 &mut self.pairs,
                 &self.shot_patches,
-                &Refinement {
-                    threshold: self.params.adaptive_threshold,
-                    min_element_size: self.lengths.min_element_size,
-                    max_elements: self.max_elements,
-                    estimate_open,
-                },
+                &refinement,
+                scanned,
             )?;
             self.elements_split += split as u64;
             self.work += w;
