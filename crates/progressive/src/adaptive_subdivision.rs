@@ -102,14 +102,40 @@ fn update_pairs(
     }
     reprobe.sort_unstable();
     reprobe.dedup();
-    kept.par_extend(
-        reprobe
-            .par_iter()
-            .flat_map_iter(|&e| probe(scene, mesh, locator, e)),
-    );
-    kept.sort_unstable();
-    kept.dedup();
-    kept
+    let mut found: Vec<(u32, u32)> = reprobe
+        .par_iter()
+        .flat_map_iter(|&e| probe(scene, mesh, locator, e))
+        .collect();
+    found.sort_unstable();
+    found.dedup();
+    union_sorted(&kept, &found)
+}
+
+/// The union of two ascending lists without repeats, ascending and without repeats (a merge: the kept pairs
+/// are most of the list, and sorting them again would cost O(n log n) on every refinement).
+fn union_sorted<T: Ord + Copy>(a: &[T], b: &[T]) -> Vec<T> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut k) = (0, 0);
+    while let (Some(&x), Some(&y)) = (a.get(i), b.get(k)) {
+        match x.cmp(&y) {
+            std::cmp::Ordering::Less => {
+                out.push(x);
+                i += 1;
+            }
+            std::cmp::Ordering::Greater => {
+                out.push(y);
+                k += 1;
+            }
+            std::cmp::Ordering::Equal => {
+                out.push(x);
+                i += 1;
+                k += 1;
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[k..]);
+    out
 }
 
 /// Settings of a refinement pass.
@@ -131,9 +157,57 @@ fn splittable(el: &Element, min_size: f64) -> bool {
     0.5 * el.polygon.max_edge() >= min_size * (1.0 - 1e-9)
 }
 
+/// Neighbour pairs per rayon task of the contrast scan.
+const SCAN_RUN: usize = 1024;
+
+/// Appends to `out` the elements to split among `pairs`: both of every pair whose contrast exceeds the
+/// threshold, each if it is splittable (unsorted, with repeats).
+fn marked_in(
+    pairs: &[(u32, u32)],
+    elements: &[Element],
+    radiosity: &[Rgb],
+    r: &Refinement,
+    out: &mut Vec<u32>,
+) {
+    for &(a, b) in pairs {
+        if contrast(radiosity[a as usize], radiosity[b as usize]) > r.threshold {
+            for e in [a, b] {
+                if splittable(&elements[e as usize], r.min_element_size) {
+                    out.push(e);
+                }
+            }
+        }
+    }
+}
+
+/// The elements to split among the neighbour `pairs` of the current leaves, at the current radiosities
+/// (unsorted, with repeats): on rayon tasks when there are threads to share them.
+pub(crate) fn scan(
+    pairs: &[(u32, u32)],
+    elements: &[Element],
+    radiosity: &[Rgb],
+    r: &Refinement,
+) -> Vec<u32> {
+    let mut marked = Vec::new();
+    if rayon::current_num_threads() == 1 || pairs.len() <= SCAN_RUN {
+        marked_in(pairs, elements, radiosity, r, &mut marked);
+    } else {
+        marked = pairs
+            .par_chunks(SCAN_RUN)
+            .flat_map_iter(|run| {
+                let mut out = Vec::new();
+                marked_in(run, elements, radiosity, r, &mut out);
+                out
+            })
+            .collect();
+    }
+    marked
+}
+
 /// Splits leaves across contrasts above the threshold until none remain; new elements re-gather from every
-/// patch shot so far. `pairs` holds the neighbour pairs of the current leaves and is kept up to date.
-/// Returns the number of elements split and the form-factor work.
+/// patch shot so far. `pairs` holds the neighbour pairs of the current leaves and is kept up to date;
+/// `scanned`, if given, is [`scan`] of the current mesh (taken alongside the last shot's sums). Returns the
+/// number of elements split and the form-factor work.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn refine(
     scene: &Scene,
@@ -144,24 +218,16 @@ pub(crate) fn refine(
     pairs: &mut Vec<(u32, u32)>,
     shot_patches: &[u32],
     r: &Refinement,
+    mut scanned: Option<Vec<u32>>,
 ) -> Result<(usize, Work), SolveError> {
     let mut split_total = 0;
     let mut work = Work::default();
     loop {
-        // Every step scans all pairs: on rayon threads (sorted after, so the same on any number of threads).
-        let elements = &mesh.elements;
-        let mut marked: Vec<u32> = pairs
-            .par_iter()
-            .with_min_len(1024)
-            .flat_map_iter(|&(a, b)| {
-                let (ea, eb) = (&elements[a as usize], &elements[b as usize]);
-                let split = contrast(ea.radiosity, eb.radiosity) > r.threshold;
-                [(a, ea), (b, eb)]
-                    .into_iter()
-                    .filter(move |(_, el)| split && splittable(el, r.min_element_size))
-                    .map(|(id, _)| id)
-            })
-            .collect();
+        // Every step scans all pairs (sorted after, so the same on any number of threads).
+        let mut marked = match scanned.take() {
+            Some(m) => m,
+            None => scan(pairs, &mesh.elements, &mesh.radiosity, r),
+        };
         marked.sort_unstable();
         marked.dedup();
         if marked.is_empty() {
@@ -205,7 +271,7 @@ pub(crate) fn refine(
             })
             .collect();
         for (k, (b, w)) in gathered.into_iter().enumerate() {
-            mesh.elements[first_new + k].radiosity = b;
+            mesh.radiosity[first_new + k] = b;
             work += w;
         }
         // Correct each parent's patch by the change of its mean radiosity over the open area, which the
@@ -214,10 +280,14 @@ pub(crate) fn refine(
             let parent = mesh.elements[e as usize];
             let c0 = parent.first_child as usize;
             let children = &mesh.elements[c0..c0 + 4];
-            let after: Rgb = children.iter().map(|c| c.open_area() * c.radiosity).sum();
+            let after: Rgb = children
+                .iter()
+                .zip(&mesh.radiosity[c0..c0 + 4])
+                .map(|(c, &b)| c.open_area() * b)
+                .sum();
             let same_open = children.iter().all(|c| c.open == parent.open);
             let patch = &mut mesh.patches[parent.patch as usize];
-            let d_sum = after - parent.open_area() * parent.radiosity;
+            let d_sum = after - parent.open_area() * mesh.radiosity[e as usize];
             let before = patch.unshot;
             if same_open {
                 // The children's areas sum to their parent's (up to rounding): the open area stays.
@@ -250,6 +320,21 @@ mod tests {
         assert_eq!(contrast(Rgb::ZERO, Rgb::ZERO), 0.0);
         // Scale-free: multiplying both by any factor keeps the contrast.
         assert!((contrast(1e-30 * a, 0.7e-30 * a) - contrast(a, 0.7 * a)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn union_of_sorted_lists_equals_sorting_both() {
+        // Against sort + dedup of the concatenation, on lists with shared items, empty lists and runs of
+        // either list beyond the other's end.
+        let lists: [&[u32]; 5] = [&[], &[1, 4, 9], &[0, 1, 2, 9, 10], &[4], &[11, 12]];
+        for a in lists {
+            for b in lists {
+                let mut expect = [a, b].concat();
+                expect.sort_unstable();
+                expect.dedup();
+                assert_eq!(union_sorted(a, b), expect, "{a:?} ∪ {b:?}");
+            }
+        }
     }
 
     #[test]

@@ -64,9 +64,7 @@ pub struct ProgressiveSolution {
 impl Solution for ProgressiveSolution {
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         match self.locator.locate(&self.mesh, face, point) {
-            Some(e) => {
-                self.mesh.elements[e as usize].radiosity + self.reflectance[face] * self.ambient
-            }
+            Some(e) => self.mesh.radiosity[e as usize] + self.reflectance[face] * self.ambient,
             None => Rgb::ZERO,
         }
     }
@@ -86,7 +84,7 @@ pub struct ProgressiveSolver<'a> {
     weights: Rgb,
     interreflection: Rgb,
     overshooting: Interreflection,
-    scratch: Vec<(f64, Work)>,
+    scratch: Vec<f64>,
     max_elements: usize,
     steps: u64,
     shots: u64,
@@ -243,7 +241,7 @@ impl<'a> ProgressiveSolver<'a> {
                     face: el.face as usize,
                     polygon: el.polygon,
                     area: el.area,
-                    radiosity: el.radiosity,
+                    radiosity: mesh.radiosity[e as usize],
                     open: el.open,
                 }
             })
@@ -280,11 +278,23 @@ impl<'a> ProgressiveSolver<'a> {
             && self.kernel.indirect_visibility.is_area_sampled()
     }
 
-    /// Shoots once, if the stopping rule allows; returns whether it did.
-    fn shoot_once(&mut self) -> bool {
+    /// The settings of adaptive subdivision.
+    fn refinement(&self) -> Refinement {
+        Refinement {
+            threshold: self.params.adaptive_threshold,
+            min_element_size: self.lengths.min_element_size,
+            max_elements: self.max_elements,
+            estimate_open: self.open_shares_apply(),
+        }
+    }
+
+    /// Shoots once, if the stopping rule allows; returns whether it did, and with `scan`, the contrast scan of
+    /// adaptive subdivision after the shot ([`adaptive_subdivision::scan`]), taken on another rayon task while
+    /// this one sums the shot over the patches (the two read disjoint data).
+    fn shoot_once(&mut self, scan: bool) -> (bool, Option<Vec<u32>>) {
         if let Some(reason) = self.check_stop() {
             self.stop = Some(reason);
-            return false;
+            return (false, None);
         }
         let patches = &self.solution.mesh.patches;
         let ambient = match self.params.overshoot {
@@ -295,10 +305,10 @@ impl<'a> ProgressiveSolver<'a> {
             shooting::select_shooter(self.scene, patches, self.weights, ambient)
         else {
             self.stop = Some(StopReason::NothingToShoot);
-            return false;
+            return (false, None);
         };
         let sent = patches[j].open_area * amount;
-        let (w, returned) = shooting::shoot(
+        let w = shooting::shoot(
             self.scene,
             self.accel,
             &self.kernel,
@@ -307,6 +317,25 @@ impl<'a> ProgressiveSolver<'a> {
             amount,
             &mut self.scratch,
         );
+        let refinement = self.refinement();
+        let Mesh {
+            patches,
+            elements,
+            radiosity,
+            leaves,
+            ..
+        } = &mut self.solution.mesh;
+        let mut book =
+            || shooting::book(self.scene, patches, elements, leaves, &self.scratch, amount);
+        let (returned, scanned) = if scan {
+            let pairs = &self.pairs;
+            let (returned, marked) = rayon::join(book, || {
+                adaptive_subdivision::scan(pairs, elements, radiosity, &refinement)
+            });
+            (returned, Some(marked))
+        } else {
+            (book(), None)
+        };
         self.overshooting.record(sent, returned);
         self.work += w;
         if !self.has_shot[j] {
@@ -314,67 +343,16 @@ impl<'a> ProgressiveSolver<'a> {
             self.shot_patches.push(j as u32);
         }
         self.shots += 1;
-        true
+        (true, scanned)
     }
 }
 
 impl Solver for ProgressiveSolver<'_> {
+    /// One step, run on a rayon worker thread (`rayon::scope`; inline when called on one): the step's parallel
+    /// loops (a gather per shot, the contrast scan, re-gathers) then start from a pool thread, without handing
+    /// work from the caller's thread to the pool and waking it again for each loop.
     fn step(&mut self) -> Result<Step, SolveError> {
-        if self.stop.is_some() {
-            return Ok(Step::Converged);
-        }
-        self.output.invalidate();
-        self.steps += 1;
-        if !self.open_estimated {
-            if self.open_shares_apply() {
-                self.work.rays +=
-                    self.solution
-                        .mesh
-                        .estimate_open(self.scene, self.accel, self.kernel.seed);
-            }
-            self.open_estimated = true;
-        }
-        let mut shot_any = false;
-        for _ in 0..self.params.shots_per_step {
-            if !self.shoot_once() {
-                break;
-            }
-            shot_any = true;
-        }
-        if shot_any && self.params.adaptive {
-            let estimate_open = self.open_shares_apply();
-            let (split, w) = adaptive_subdivision::refine(
-                self.scene,
-                self.accel,
-                &self.kernel,
-                &mut self.solution.mesh,
-                &self.solution.locator,
-                &mut self.pairs,
-                &self.shot_patches,
-                &Refinement {
-                    threshold: self.params.adaptive_threshold,
-                    min_element_size: self.lengths.min_element_size,
-                    max_elements: self.max_elements,
-                    estimate_open,
-                },
-            )?;
-            self.elements_split += split as u64;
-            self.work += w;
-        }
-        self.update_ambient();
-        if !self.unshot_power().is_finite() {
-            return Err(SolveError::Numerical(
-                "the unshot power is no longer finite".into(),
-            ));
-        }
-        if self.stop.is_none() {
-            self.stop = self.check_stop();
-        }
-        Ok(if self.stop.is_some() {
-            Step::Converged
-        } else {
-            Step::Continue
-        })
+        rayon::scope(|_| self.step_on_worker())
     }
 
     fn solution(&self) -> &dyn Solution {
@@ -397,9 +375,70 @@ impl Solver for ProgressiveSolver<'_> {
                 + self.pairs.capacity() * 8
                 + self.has_shot.capacity()
                 + self.shot_patches.capacity() * 4
-                + self.scratch.capacity() * size_of::<(f64, Work)>()) as u64,
+                + self.scratch.capacity() * size_of::<f64>()) as u64,
             residual: Some(self.unshot_fraction()),
         }
+    }
+}
+
+impl ProgressiveSolver<'_> {
+    /// [`Solver::step`]'s work.
+    fn step_on_worker(&mut self) -> Result<Step, SolveError> {
+        if self.stop.is_some() {
+            return Ok(Step::Converged);
+        }
+        self.output.invalidate();
+        self.steps += 1;
+        if !self.open_estimated {
+            if self.open_shares_apply() {
+                self.work.rays +=
+                    self.solution
+                        .mesh
+                        .estimate_open(self.scene, self.accel, self.kernel.seed);
+            }
+            self.open_estimated = true;
+        }
+        let mut shot_any = false;
+        let mut scanned = None;
+        for k in 1..=self.params.shots_per_step {
+            let last = k == self.params.shots_per_step;
+            let (shot, s) = self.shoot_once(last && self.params.adaptive);
+            if !shot {
+                break;
+            }
+            shot_any = true;
+            scanned = s;
+        }
+        if shot_any && self.params.adaptive {
+            let refinement = self.refinement();
+            let (split, w) = adaptive_subdivision::refine(
+                self.scene,
+                self.accel,
+                &self.kernel,
+                &mut self.solution.mesh,
+                &self.solution.locator,
+                &mut self.pairs,
+                &self.shot_patches,
+                &refinement,
+                scanned,
+            )?;
+            self.elements_split += split as u64;
+            self.work += w;
+        }
+        self.update_ambient();
+        if !self.unshot_power().is_finite() {
+            return Err(SolveError::Numerical(
+                "the unshot power is no longer finite".into(),
+            ));
+        }
+        if self.stop.is_none() {
+            self.stop = self.check_stop();
+        }
+        Ok(if self.stop.is_some() {
+            Step::Converged
+        } else {
+            Step::Continue
+        })
     }
 }
 
@@ -566,7 +605,7 @@ mod tests {
                 sum += ff * patch.shot;
             }
             let expect = scene.emission(f) + scene.reflectance(f) * sum;
-            let d = (expect - el.radiosity).abs().max_element();
+            let d = (expect - mesh.radiosity[e as usize]).abs().max_element();
             assert!(
                 d < 1e-12 * expect.max_element().max(1.0),
                 "element {e}: {d}"

@@ -57,9 +57,6 @@ pub(crate) struct Element {
     pub patch: u32,
     /// First of its four children (consecutive), or [`LEAF`].
     pub first_child: u32,
-    /// Radiosity B_e (W/m²) of its open part, including emission. Meaningful for leaves; a split element keeps
-    /// its last value.
-    pub radiosity: Rgb,
     /// Open share o_e of its area (1 until estimated).
     pub open: f64,
 }
@@ -88,6 +85,10 @@ pub(crate) struct Mesh {
     pub patches: Vec<Patch>,
     /// All elements ever created (split ones stay, as interior quadtree nodes).
     pub elements: Vec<Element>,
+    /// Radiosity B_e (W/m²) of each element's open part, including emission, by element index. Meaningful for
+    /// leaves; a split element keeps its last value. Kept apart from [`Element`] so that a shot writes, and the
+    /// contrast scan of adaptive subdivision reads, one compact array.
+    pub radiosity: Vec<Rgb>,
     /// The leaves, in ascending element index.
     pub leaves: Vec<u32>,
     /// Top-level elements of face f: `face_roots[f] .. face_roots[f + 1]`.
@@ -103,9 +104,10 @@ pub(crate) fn piece_count(poly: &Polygon, size: f64) -> f64 {
     (nu * nv) as f64
 }
 
-/// Bytes held per element, for budgets and reports: the element, its leaf entry, its place in the face grid and
-/// its share of the neighbour pairs.
-pub(crate) const BYTES_PER_ELEMENT: f64 = (size_of::<Element>() + 4 + 8 + 4 * 8) as f64;
+/// Bytes held per element, for budgets and reports: the element and its radiosity, its leaf entry, its place in
+/// the face grid and its share of the neighbour pairs.
+pub(crate) const BYTES_PER_ELEMENT: f64 =
+    (size_of::<Element>() + size_of::<Rgb>() + 4 + 8 + 4 * 8) as f64;
 
 impl Mesh {
     /// Meshes every face into patches of `patch_size` and elements of `element_size`. Emitting faces start with
@@ -136,6 +138,7 @@ impl Mesh {
         }
         let mut patches = Vec::new();
         let mut elements = Vec::new();
+        let mut radiosity = Vec::new();
         let mut face_roots = Vec::with_capacity(scene.face_count() + 1);
         for f in 0..scene.face_count() {
             face_roots.push(elements.len() as u32);
@@ -157,9 +160,9 @@ impl Mesh {
                         face: f as u32,
                         patch: patches.len() as u32,
                         first_child: LEAF,
-                        radiosity: e_face,
                         open: 1.0,
                     });
+                    radiosity.push(e_face);
                 }
                 patches.push(Patch {
                     polygon: pp,
@@ -179,6 +182,7 @@ impl Mesh {
         Ok(Self {
             patches,
             elements,
+            radiosity,
             leaves,
             face_roots,
         })
@@ -246,10 +250,7 @@ impl Mesh {
         }
         let sum: Rgb = leaves
             .iter()
-            .map(|&e| {
-                let el = &self.elements[e as usize];
-                el.radiosity * el.open_area()
-            })
+            .map(|&e| self.radiosity[e as usize] * self.elements[e as usize].open_area())
             .sum();
         sum / patch.open_area
     }
@@ -261,6 +262,7 @@ impl Mesh {
         let first_new = self.elements.len();
         for &e in marked {
             let parent = self.elements[e as usize];
+            let b = self.radiosity[e as usize];
             self.elements[e as usize].first_child = self.elements.len() as u32;
             for polygon in parent.polygon.split4() {
                 self.elements.push(Element {
@@ -269,6 +271,7 @@ impl Mesh {
                     first_child: LEAF,
                     ..parent
                 });
+                self.radiosity.push(b);
             }
         }
         let elements = &self.elements;
@@ -282,6 +285,7 @@ impl Mesh {
     pub fn bytes(&self) -> usize {
         self.patches.capacity() * size_of::<Patch>()
             + self.elements.capacity() * size_of::<Element>()
+            + self.radiosity.capacity() * size_of::<Rgb>()
             + self.leaves.capacity() * 4
             + self.face_roots.capacity() * 4
     }
