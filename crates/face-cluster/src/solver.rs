@@ -87,6 +87,14 @@ impl MethodParams for FaceClusterSolveParams {
         let mut d: Vec<_> = HierarchicalParams::docs()
             .into_iter()
             .filter(|(k, _)| *k != "lazy_linking")
+            .map(|(k, v)| match k {
+                "visibility" => (
+                    k,
+                    "rays per link, between the two ends' 4 representative points: unoccluded | centre | \
+                     jittered2x2 | jittered4x4 (default; all 16 pairs)",
+                ),
+                _ => (k, v),
+            })
             .collect();
         d.push((
             "cache_dir",
@@ -104,7 +112,23 @@ impl MethodParams for FaceClusterSolveParams {
     }
 
     fn validate(&self) -> Result<(), SolveError> {
-        self.engine.validate()
+        self.engine.validate()?;
+        // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
+        // points of a patch): more rays than point pairs would repeat segments.
+        let points = FaceClusterParams::default().samples_per_node.min(4);
+        let rays = self.engine.visibility.rays() as usize;
+        if rays > points * points {
+            return Err(SolveError::param(
+                "visibility",
+                format!(
+                    "face clusters cast a link's visibility rays between the {points} representative points of \
+                     each end, at most {} distinct segments, and {rays} were asked for; use jittered4x4 (the \
+                     default), jittered2x2, centre or unoccluded",
+                    points * points
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn default_values() -> Vec<(String, String)> {

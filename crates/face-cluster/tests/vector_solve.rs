@@ -387,6 +387,23 @@ fn closed_scene_rows_make_the_furnaces_hold_at_rho_0_999() {
     assert!(message.contains("row_normalisation"), "{message}");
 }
 
+/// Sixty-four rays a link would repeat segments between the ends' four representative points (16 pairs):
+/// refused with the key named, not silently capped.
+#[test]
+fn more_visibility_rays_than_point_pairs_are_refused() {
+    let bad = FaceClusterSolveParams::from_pairs(&[(
+        "visibility".to_string(),
+        "jittered8x8".to_string(),
+    )])
+    .and_then(|p| p.validate().map(|()| p));
+    let message = bad.expect_err("64 rays").to_string();
+    assert!(
+        message.contains("visibility") && message.contains("16"),
+        "{message}"
+    );
+    assert!(params(&[("visibility", "jittered4x4")]).validate().is_ok());
+}
+
 /// One smooth sphere (the bumpy sphere's room, light and sphere with no bumps) tessellated at 1k, 16k and
 /// 256k faces, under the same light and ε = 1e-3: the solve's engine nodes and links stay flat (measured 847,
 /// 927, 857 nodes and 8,417, 8,386, 8,326 links), and so do its reads of input faces (each time a tree leaf's
