@@ -36,6 +36,13 @@ impl ClampedIrradiance {
         isotropic: Rgb::ZERO,
     };
 
+    /// Both parts times `c`.
+    pub fn scaled(&self, c: f64) -> Self {
+        let mut out = Self::ZERO;
+        out.add_scaled(Rgb::splat(c), self);
+        out
+    }
+
     /// The irradiance I(n) = max(0, n·e + s) of a face with unit normal `n`, per channel.
     pub fn at(&self, n: DVec3) -> Rgb {
         Rgb::new(

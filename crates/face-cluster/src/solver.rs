@@ -25,11 +25,10 @@ use radlab_scene::{
     Accel, FaceId, MethodParams, Reconstruction, Rgb, Scene, Solution, SolveError, Solver, Stats,
     Step,
 };
-use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
-
 use radlab_volume_cluster::RowNormalisation;
 use radlab_volume_cluster::enclosure::enclosures;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::face_node::{FaceContext, FaceNode};
@@ -380,9 +379,7 @@ impl<'a> FaceClusterSolver<'a> {
                 }
             }
             return if area > 0.0 {
-                let mut mean = ClampedIrradiance::ZERO;
-                mean.add_scaled(Rgb::splat(1.0 / area), &sum);
-                mean
+                sum.scaled(1.0 / area)
             } else {
                 h[root as usize]
             };
@@ -411,13 +408,9 @@ impl<'a> FaceClusterSolver<'a> {
                 }
             }
             sums.into_iter()
-                .map(|(n, e, a)| {
-                    let mut irradiance = ClampedIrradiance::ZERO;
-                    irradiance.add_scaled(Rgb::splat(if a > 0.0 { 1.0 / a } else { 1.0 }), &e);
-                    VertexField {
-                        normal: n.normalize_or_zero(),
-                        irradiance,
-                    }
+                .map(|(n, e, a)| VertexField {
+                    normal: n.normalize_or_zero(),
+                    irradiance: if a > 0.0 { e.scaled(1.0 / a) } else { e },
                 })
                 .collect()
         })
