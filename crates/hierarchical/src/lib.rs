@@ -23,7 +23,7 @@
 //! | `visibility` | `jittered4x4` | rays per link: `unoccluded`, `centre` (1), `jittered2x2`, `jittered4x4` (16), `jittered8x8`; area-sampled settings also give each leaf its open share (128 rays per leaf) |
 //! | `quadrature` | 2 | Gauss points per side of the receiver quadrature |
 //! | `tolerance` | 1e-4 | estimated relative error at which solving stops |
-//! | `max_steps` | 100000 | hard stop |
+//! | `max_steps` | 100000 | hard stop, reported as `Step::Capped` (a cap, not a convergence) |
 //! | `gather` | `leaf` | `leaf` (kernel integrated at each leaf for every link above it; exact form-factor sums) or `link` (classic per-link mean, pushed) |
 //! | `reconstruction` | `final-gather` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_scene::reconstruction); the default chosen by measurement ([`DEFAULT_RECONSTRUCTION`]) |
 //! | `memory_budget_mib` | 4096 | refuse to hold more |

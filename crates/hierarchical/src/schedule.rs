@@ -52,7 +52,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
         if self.steps >= self.params.max_steps {
             self.phase = Phase::Done;
-            return Ok(Step::Converged);
+            return Ok(Step::Capped);
         }
         self.steps += 1;
         let lazy = self.lazy();

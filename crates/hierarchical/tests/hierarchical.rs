@@ -711,3 +711,35 @@ fn bad_parameters_are_errors_that_name_them() {
     assert!(e.contains("memory_budget_mib"), "{e}");
     assert!(HierarchicalParams::from_pairs(&[("gather".into(), "leaf".into())]).is_ok());
 }
+
+/// A solve stopped by its own `max_steps` cap, before its tolerance was met, reports [`Step::Capped`], not
+/// [`Step::Converged`] (radlab's reports call such a run "step-limit"); the same solve without the cap
+/// converges.
+#[test]
+fn a_solve_at_its_step_cap_says_so() {
+    let scene = shadow_box();
+    let accel = Accel::new(&scene);
+    let p = HierarchicalParams {
+        max_steps: 2,
+        ..leaf_params()
+    };
+    let mut s = HierarchicalSolver::new(&scene, &accel, p, 7).expect("valid parameters");
+    let mut last = Step::Continue;
+    for _ in 0..10 {
+        last = s.step().expect("step");
+        if last != Step::Continue {
+            break;
+        }
+    }
+    assert_eq!(last, Step::Capped);
+    let mut s =
+        HierarchicalSolver::new(&scene, &accel, leaf_params(), 7).expect("valid parameters");
+    let mut last = Step::Continue;
+    for _ in 0..100_000 {
+        last = s.step().expect("step");
+        if last != Step::Continue {
+            break;
+        }
+    }
+    assert_eq!(last, Step::Converged);
+}

@@ -313,7 +313,7 @@ impl<'a> MatrixSolver<'a> {
         if self.iterations >= self.params.max_iterations {
             self.hit_cap = true;
             self.finish();
-            return Ok(Step::Converged);
+            return Ok(Step::Capped);
         }
         Ok(Step::Continue)
     }
@@ -389,6 +389,7 @@ impl Solver for MatrixSolver<'_> {
                 self.output.invalidate();
                 self.iterate()
             }
+            Phase::Done if self.hit_cap => Ok(Step::Capped),
             Phase::Done => Ok(Step::Converged),
         }
     }

@@ -15,11 +15,12 @@ const METHODS: [Iteration; 3] = [
     Iteration::ConjugateGradient,
 ];
 
-/// Steps until the solver says it has converged (bounded, so a broken stopping rule fails instead of hanging).
+/// Steps until the solver stops (bounded, so a broken stopping rule fails instead of hanging): converged, or
+/// at its iteration cap, which the tests of the cap check through `hit_iteration_cap`.
 fn run(s: &mut MatrixSolver) {
     for _ in 0..10_000_000 {
         match s.step().expect("step") {
-            Step::Converged => return,
+            Step::Converged | Step::Capped => return,
             Step::Continue => {}
         }
     }
@@ -510,6 +511,12 @@ fn iteration_cap_stops_cleanly() {
     );
     assert!(s.hit_iteration_cap());
     assert_eq!(s.iterations(), 3);
+    let mut s = s;
+    assert_eq!(
+        s.step().expect("step"),
+        Step::Capped,
+        "a capped solve says so"
+    );
 }
 
 #[test]

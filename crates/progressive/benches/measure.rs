@@ -82,7 +82,7 @@ fn trace(solver: &mut dyn Solver, r: Option<&Reference>) -> (Duration, Vec<(f64,
         let t = Instant::now();
         let s = solver.step().expect("step");
         spent += t.elapsed();
-        let done = s == Step::Converged;
+        let done = s != Step::Continue;
         if let Some(r) = r
             && (spent.as_secs_f64() >= next || done)
         {
@@ -383,7 +383,7 @@ fn high_albedo_table() {
                 let s = p.step().expect("step");
                 spent += t.elapsed();
                 err = furnace_error(&p, exact);
-                if s == Step::Converged {
+                if s != Step::Continue {
                     break;
                 }
             }

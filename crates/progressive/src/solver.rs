@@ -36,6 +36,16 @@ pub enum StopReason {
     NothingToShoot,
 }
 
+impl StopReason {
+    /// What a step reports once the solver stopped for this reason: the cap on shots is no convergence.
+    pub fn step(self) -> Step {
+        match self {
+            StopReason::MaxShots => Step::Capped,
+            StopReason::UnshotFraction | StopReason::NothingToShoot => Step::Converged,
+        }
+    }
+}
+
 /// One leaf element of the current solution.
 #[derive(Clone, Copy, Debug)]
 pub struct ElementView {
@@ -384,8 +394,8 @@ impl Solver for ProgressiveSolver<'_> {
 impl ProgressiveSolver<'_> {
     /// [`Solver::step`]'s work.
     fn step_on_worker(&mut self) -> Result<Step, SolveError> {
-        if self.stop.is_some() {
-            return Ok(Step::Converged);
+        if let Some(reason) = self.stop {
+            return Ok(reason.step());
         }
         self.output.invalidate();
         self.steps += 1;
@@ -434,11 +444,7 @@ impl ProgressiveSolver<'_> {
         if self.stop.is_none() {
             self.stop = self.check_stop();
         }
-        Ok(if self.stop.is_some() {
-            Step::Converged
-        } else {
-            Step::Continue
-        })
+        Ok(self.stop.map_or(Step::Continue, StopReason::step))
     }
 }
 

@@ -179,7 +179,7 @@ fn unshot_power_decreases_monotonically() {
                 solver.shots()
             );
             last = now;
-            if s == Step::Converged {
+            if s != Step::Continue {
                 break;
             }
         }
@@ -627,4 +627,27 @@ fn final_gather_is_exact_for_direct_light_anywhere_and_gouraud_is_continuous() {
             }
         }
     }
+}
+
+/// Stopped by `max_shots` before its unshot fraction fell to the stopping rule, a solve reports
+/// [`Step::Capped`]; without the cap the same solve converges.
+#[test]
+fn a_solve_at_its_shot_cap_says_so() {
+    let scene = closed_room(1.0);
+    let accel = Accel::new(&scene);
+    let params = ProgressiveParams {
+        adaptive: false,
+        max_shots: Some(3),
+        ..Default::default()
+    };
+    let mut s = ProgressiveSolver::new(&scene, &accel, params, 3).expect("solver");
+    run(&mut s);
+    assert_eq!(s.step().expect("step"), Step::Capped);
+    let params = ProgressiveParams {
+        adaptive: false,
+        ..Default::default()
+    };
+    let mut s = ProgressiveSolver::new(&scene, &accel, params, 3).expect("solver");
+    run(&mut s);
+    assert_eq!(s.step().expect("step"), Step::Converged);
 }

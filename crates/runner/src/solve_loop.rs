@@ -99,7 +99,7 @@ fn run_here(
         after_step(&*solver, &rec)?;
         let outcome = if result == Step::Converged {
             Some(Outcome::Converged)
-        } else if step >= limits.max_steps {
+        } else if result == Step::Capped || step >= limits.max_steps {
             Some(Outcome::StepLimit)
         } else if wall >= limits.time_limit {
             Some(Outcome::TimeLimit)

@@ -19,6 +19,10 @@ pub enum Step {
     Continue,
     /// The method's own stopping rule is met; further steps do nothing.
     Converged,
+    /// The method's own cap on its work (matrix `max_iterations`, progressive `max_shots`, the hierarchical
+    /// engine's `max_steps`) was reached before its stopping rule was met; further steps do nothing. Not a
+    /// convergence: reports say so.
+    Capped,
 }
 
 /// Counters a solver reports after any step. Zero where a method has no such thing.
