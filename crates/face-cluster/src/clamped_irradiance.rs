@@ -4,13 +4,13 @@
 //!   I(n) = max(0, n·e + s).
 //!
 //! A link brings irradiance g travelling along unit u, and a face of normal n takes g max(0, n·u). Where every
-//! face of the receiver faces the link (n·u ≥ 0 over the node's normal cone and the link's spread of
-//! directions) that is g n·u: the link adds g u to e, the exact vector transfer. Where the cone straddles
+//! face of the receiver faces the link (n·u ≥ 0 over the node's normal cone) that is g n·u: the link adds
+//! g u to e, the exact vector transfer. Where the cone straddles
 //! the link, some faces see it from behind and n·u would count them negatively; summed over links from many
 //! directions those negative parts cancel what other links bring, so that a closed part linked whole
 //! gathered nothing from an even surrounding. Such a link instead adds the least-squares line a + b x of the
-//! clamped cosine max(0, x) over the range of cosines x = n·u its receiver's cone and spread allow: b g u to
-//! e and a g to s. Over the whole range [−1, 1] that line is 1/4 + x/2, the clamped cosine's projection on
+//! clamped cosine max(0, x) over the range of cosines x = n·u its receiver's cone allows: b g u to e and a g
+//! to s. Over the whole range [−1, 1] that line is 1/4 + x/2, the clamped cosine's projection on
 //! the constant and linear spherical harmonics (Ramamoorthi & Hanrahan 2001): exact on average over an even
 //! surrounding (a closed part in a furnace receives a quarter of g per unit area, Cauchy's mean projected
 //! area), and within g/4 at any face for one link. The same line gives what a curved source with faces

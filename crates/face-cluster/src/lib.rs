@@ -90,8 +90,9 @@
 //!   step cap; at ε = 1e-5 the 192-face sphere converges 4.6% high, at 1e-6 within 1e-9); the 48-face sphere
 //!   of the conformance suite is refined to its faces and its rows sum to one.
 //! - Terrain: relative L1 stays at 6.7–7.2% on the 10⁵-face terrain whatever ε (1e-4 … 1e-5), and at 4.2–5.3%
-//!   on the 10⁴-face one even at the radiosity norm with ε = 1e-3 (3.5M links), where volume clusters (α)
-//!   reach 1.2% and hierarchical radiosity 0.9%; the answers are 3–4% low at every brightness. Against
+//!   on the 10⁴-face one even at the radiosity norm with ε = 1e-3 (3.5M links); volume clusters (α) reach
+//!   1.2% on the 10⁵-face terrain and hierarchical radiosity 0.9% on the 10⁴-face one. The answers are 3–4%
+//!   low at every brightness. Against
 //!   hierarchical radiosity on 2,000 faces the ground's total power is 3.1% low at ρ = 0.5 (3.3% with 1.7M
 //!   links) but 1.1% high at ρ = 0.01, so the loss is in the light the terrain sends onto itself. A curved
 //!   node whose two children do not face each other (neither centroid in front of the other's plane: a ridge,
