@@ -719,27 +719,17 @@ fn bad_parameters_are_errors_that_name_them() {
 fn a_solve_at_its_step_cap_says_so() {
     let scene = shadow_box();
     let accel = Accel::new(&scene);
-    let p = HierarchicalParams {
+    // Steps until the solver stops (at most 100,000): what its last step said.
+    let last_step = |p: HierarchicalParams| {
+        let mut s = HierarchicalSolver::new(&scene, &accel, p, 7).expect("valid parameters");
+        (0..100_000)
+            .map(|_| s.step().expect("step"))
+            .find(|&r| r != Step::Continue)
+    };
+    let capped = HierarchicalParams {
         max_steps: 2,
         ..leaf_params()
     };
-    let mut s = HierarchicalSolver::new(&scene, &accel, p, 7).expect("valid parameters");
-    let mut last = Step::Continue;
-    for _ in 0..10 {
-        last = s.step().expect("step");
-        if last != Step::Continue {
-            break;
-        }
-    }
-    assert_eq!(last, Step::Capped);
-    let mut s =
-        HierarchicalSolver::new(&scene, &accel, leaf_params(), 7).expect("valid parameters");
-    let mut last = Step::Continue;
-    for _ in 0..100_000 {
-        last = s.step().expect("step");
-        if last != Step::Continue {
-            break;
-        }
-    }
-    assert_eq!(last, Step::Converged);
+    assert_eq!(last_step(capped), Some(Step::Capped));
+    assert_eq!(last_step(leaf_params()), Some(Step::Converged));
 }
