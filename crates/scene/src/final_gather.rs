@@ -224,20 +224,21 @@ impl FinalGather {
         let far_mean = far / (1.0 - f_near).max(MIN_FAR_SHARE);
         // T(q) at the 64 quarter centroids.
         let key = query_key(scene, src.face, c);
-        let subs: Vec<Polygon> = src
+        let subs: Vec<(Polygon, [Polygon; 4])> = src
             .polygon
             .split4()
             .iter()
             .flat_map(|q| q.split4())
+            .map(|sub| (sub, sub.split4()))
             .collect();
         let areas: Vec<[f64; 4]> = subs
             .iter()
-            .map(|sub| sub.split4().map(|quarter| quarter.area()))
+            .map(|(_, quarters)| quarters.map(|quarter| quarter.area()))
             .collect();
         let mut values: Vec<(Polygon, [(DVec3, Rgb); 4])> = subs
             .into_iter()
-            .map(|sub| {
-                let points = sub.split4().map(|quarter| {
+            .map(|(sub, quarters)| {
+                let points = quarters.map(|quarter| {
                     let q = quarter.centroid();
                     let mut r = sampling::rng(
                         self.settings.seed,
@@ -283,9 +284,8 @@ impl FinalGather {
         values.into_boxed_slice()
     }
 
-    /// E(x) + ρ(x) Σ_j F V B_j at `point` on `face`, with the near field when `near_field` (see the module
+    /// E(x) + ρ(x) Σ_j F V B_j at `point` on `face`, near sources through their near field (see the module
     /// documentation); its rays and kernel evaluations are added to the two counters.
-    #[allow(clippy::too_many_arguments)]
     fn gather(
         &self,
         scene: &Scene,
