@@ -18,10 +18,21 @@ pub const SUMMARY: &str = "Path tracing at the points asked about (next-event es
     grows with the number of points answered (a finite-element solution pays once for the scene). The same \
     estimator with many paths is the reference. `render` path-traces the camera (parameter samples_per_pixel).";
 
-/// Its parameters (per-point, then render).
+/// Its parameters (per-point, then render), each name once: a key both read with the same default
+/// (`max_depth`, `direct`) is listed with the per-point text and, where render reads it differently, render's
+/// after it.
 pub fn params() -> Vec<ParamLine> {
     let mut p = param_lines::<PathTraceParams>();
-    p.extend(param_lines::<RenderParams>());
+    for r in param_lines::<RenderParams>() {
+        match p
+            .iter_mut()
+            .find(|l| l.name == r.name && l.default == r.default)
+        {
+            Some(l) if l.doc != r.doc => l.doc = format!("{}; for render, {}", l.doc, r.doc),
+            Some(_) => {}
+            None => p.push(r),
+        }
+    }
     p
 }
 

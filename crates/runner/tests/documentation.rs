@@ -141,6 +141,19 @@ fn documented_defaults_match_the_defaults_in_use() {
 }
 
 #[test]
+fn each_parameter_is_listed_once() {
+    // `radlab methods` lists a method's parameters; a key listed twice (path tracing's per-point and render
+    // parameters share `max_depth` and `direct`) leaves the reader to guess which line holds.
+    for m in radlab_runner::methods::methods() {
+        let names: Vec<String> = (m.params)().into_iter().map(|p| p.name).collect();
+        let mut unique = names.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), names.len(), "{}: {names:?}", m.name);
+    }
+}
+
+#[test]
 fn stated_defaults_are_parsed() {
     assert_eq!(
         stated_default("dimensionless (default 0.01)").as_deref(),
