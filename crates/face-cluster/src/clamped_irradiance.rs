@@ -132,6 +132,14 @@ impl LinkCoefficient {
             isotropic: 0.0,
         }
     }
+
+    /// A transfer every face of the target takes whole, whatever its orientation.
+    pub fn isotropic(s: f64) -> Self {
+        Self {
+            vector: DVec3::ZERO,
+            isotropic: s,
+        }
+    }
 }
 
 #[cfg(test)]

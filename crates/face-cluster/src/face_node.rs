@@ -44,6 +44,9 @@ pub struct FaceContext<'a> {
     pub rho_area: Vec<Rgb>,
     /// Per tree node: Σ E_i A_i (per channel).
     pub emitted: Vec<Rgb>,
+    /// Per tree node: the light it sends onto itself and between its children, traced before the solve
+    /// (empty until [`crate::SelfExchange::trace`] fills it: then every factor reads 0).
+    pub exchange: crate::SelfExchange,
     /// The loose octree over the tree's roots (its "faces" are root indices).
     pub volumes: ClusterTree,
     /// Per volume: visibility sample points (on the roots below it).
@@ -151,6 +154,7 @@ impl<'a> FaceContext<'a> {
             rho_vector,
             rho_area,
             emitted,
+            exchange: crate::SelfExchange::default(),
             volumes,
             volume_samples,
             root_starts,
@@ -199,6 +203,20 @@ impl<'a> FaceContext<'a> {
         let slot = self.root_slot[root as usize];
         let c = &self.volumes.clusters[v as usize];
         (c.start..c.end).contains(&slot)
+    }
+
+    /// Whether tree node `n`'s two children each have the other's centroid strictly in front of their vector
+    /// area's plane (a concave node).
+    pub fn concave(&self, n: usize) -> bool {
+        let kids = self.tree.node(n).children();
+        if kids.len() != 2 {
+            return false;
+        }
+        let (a, b) = (kids.start, kids.start + 1);
+        let (ca, cb) = (self.centroid[a], self.centroid[b]);
+        let (na, nb) = (self.tree.node(a).vector_area, self.tree.node(b).vector_area);
+        let tol = 1e-9 * (ca - cb).length() * (na.length() + nb.length());
+        na.dot(cb - ca) > tol && nb.dot(ca - cb) > tol
     }
 
     /// The root volume: the engine's one root.
@@ -287,16 +305,7 @@ impl FaceNode<'_> {
             Self::Cluster(c) => c,
             Self::Patch(_) => return false,
         };
-        let kids = c.node().children();
-        if kids.len() != 2 {
-            return false;
-        }
-        let (a, b) = (kids.start, kids.start + 1);
-        let tree = &c.ctx.tree;
-        let (ca, cb) = (c.ctx.centroid[a], c.ctx.centroid[b]);
-        let (na, nb) = (tree.node(a).vector_area, tree.node(b).vector_area);
-        let tol = 1e-9 * (ca - cb).length() * (na.length() + nb.length());
-        na.dot(cb - ca) > tol && nb.dot(ca - cb) > tol
+        c.ctx.concave(c.id as usize)
     }
 
     /// Whether the node is a cluster whose children are all single faces (tree leaves).

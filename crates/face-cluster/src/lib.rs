@@ -98,9 +98,17 @@
 //!   node whose two children do not face each other (neither centroid in front of the other's plane: a ridge,
 //!   or a rough, nearly flat patch of ground) gets no self-link, so its children never exchange light, though
 //!   a heightfield's do. Refining such self-links instead (while their cap share could carry more than ε)
-//!   brought the 2,000-face total to +0.3%, but cost 15–45× (10⁵ faces: 0.45 s → 19.9 s, 57k → 636k links,
-//!   splitting faces along every boundary between touching children) and the 10⁵-face L1 went from 7.2% to
-//!   8.8%; not kept, not understood.
+//!   brought the 2,000-face total to +0.3%, but cost 15–45× (10⁵ faces: 0.45 s → 19.9 s, 57k → 636k links):
+//!   the pairs of touching children that refinement makes carry nothing while kept (their bound
+//!   min(1, A_S/A_R) splits them along every shared boundary), and the concave nodes it reaches take the same
+//!   path. `self_exchange = "traced"` ([`self_exchange`]) gives every curved node's self-link its traced
+//!   F_NN and each pair of siblings their traced exchange, kept whole. `radlab run` on the terrain, 1,024
+//!   points, 4,096-path reference, constant answers, ε = 1e-4 / 1e-5 / 1e-6, relative L1 `cap` → `traced`:
+//!   10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.5%, 10⁵ faces 6.3 / 5.6 / 5.3% → 5.0 / 3.6 / 2.9%; median point
+//!   −3.2 … −4.4% → +0.1 … +1.1%; links within 1.5% of each other (57.3k / 57.6k at 10⁵, ε = 1e-4), the trace
+//!   0.4M rays at 10⁵ faces. It is not the default because exactness inside closed concave meshes is lost: a
+//!   traced F_NN has noise, and at ρ = 0.999 the 48-face furnace sphere diverges and the 192-face one
+//!   converges 4.1× high.
 //! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 2.5% low at the defaults and 1.1% low at
 //!   ε = 1e-5 (`room_of_cubes_furnace`). Before (2) it was 16% low: links to a whole cube are kept below ε
 //!   although its cone straddles every direction, and the vectors from opposite sides cancelled. Refusing
@@ -122,6 +130,7 @@ mod error;
 pub mod face_node;
 pub mod moments;
 mod params;
+pub mod self_exchange;
 mod solver;
 pub mod tree;
 pub mod vector_transport;
@@ -133,6 +142,7 @@ pub use error::FaceClusterError;
 pub use face_node::{ClusterRef, FaceContext, FaceNode};
 pub use moments::{Moments, SymMat3};
 pub use params::FaceClusterParams;
+pub use self_exchange::{SELF_RAYS, SelfExchange, SelfExchangeMode};
 pub use solver::{DEFAULT_CACHE_DIR, DEFAULT_EPSILON, FaceClusterSolveParams, FaceClusterSolver};
 pub use tree::{FaceClusterTree, Node};
 pub use vector_transport::VectorTransport;

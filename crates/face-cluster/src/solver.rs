@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::face_node::{FaceContext, FaceNode};
+use crate::self_exchange::{SELF_RAYS, SelfExchange, SelfExchangeMode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
 
@@ -62,6 +63,9 @@ pub struct FaceClusterSolveParams {
     /// method then linear in k. Default [`RowNormalisation::Off`].
     #[serde(default)]
     pub row_normalisation: RowNormalisation,
+    /// What curved nodes send onto themselves ([`SelfExchangeMode`]). Default [`SelfExchangeMode::Cap`].
+    #[serde(default)]
+    pub self_exchange: SelfExchangeMode,
 }
 
 impl Default for FaceClusterSolveParams {
@@ -77,6 +81,7 @@ impl Default for FaceClusterSolveParams {
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
             row_normalisation: RowNormalisation::Off,
+            self_exchange: SelfExchangeMode::Cap,
         }
     }
 }
@@ -106,6 +111,10 @@ impl MethodParams for FaceClusterSolveParams {
              face find whether the scene is closed, a pass linear in the faces; if it is, each leaf's row is \
              rescaled to sum to one, as an enclosure's form factors do, and a closed furnace holds by \
              construction)",
+        ));
+        d.push((
+            "self_exchange",
+            "cap (default: a concave node's self-link carries its spherical cap's share, exact inside a sphere;              other curved nodes exchange nothing within) | traced (at least 4 rays from every face before the              solve estimate every curved node's self form factor and its children's exchange, carried evenly;              terrain's light onto itself is kept, but closed concave scenes near rho = 1 diverge)",
         ));
         d
     }
@@ -146,6 +155,7 @@ impl MethodParams for FaceClusterSolveParams {
             .chain([
                 ("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}")),
                 ("row_normalisation".to_string(), "\"off\"".to_string()),
+                ("self_exchange".to_string(), "\"cap\"".to_string()),
             ])
             .collect()
     }
@@ -177,6 +187,15 @@ impl MethodParams for FaceClusterSolveParams {
                 )
             })?,
         };
+        let self_exchange = match table.remove("self_exchange") {
+            None => SelfExchangeMode::Cap,
+            Some(v) => v.try_into().map_err(|e: toml::de::Error| {
+                SolveError::param(
+                    "self_exchange",
+                    format!("{}; use cap or traced", e.message()),
+                )
+            })?,
+        };
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
@@ -185,6 +204,7 @@ impl MethodParams for FaceClusterSolveParams {
             engine,
             cache_dir,
             row_normalisation,
+            self_exchange,
         })
     }
 }
@@ -253,7 +273,12 @@ impl<'a> FaceClusterSolver<'a> {
         let roots = tree.roots();
         let scene_area: f64 = roots.clone().map(|r| tree.node(r).area).sum();
         let tree_nodes = tree.nodes().len();
-        let ctx = Arc::new(FaceContext::new(tree, scene));
+        let before = accel.rays_cast();
+        let mut ctx = FaceContext::new(tree, scene);
+        if params.self_exchange == SelfExchangeMode::Traced {
+            ctx.exchange = SelfExchange::trace(&ctx.tree, scene, accel, seed, SELF_RAYS);
+        }
+        let ctx = Arc::new(ctx);
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
         let transport = VectorTransport::new(
             patches,
@@ -271,7 +296,6 @@ impl<'a> FaceClusterSolver<'a> {
         let root = ctx.root_volume();
         let mut engine = Engine::new(vec![root], transport, p, min_size)?;
         engine.skip_initial_links();
-        let before = accel.rays_cast();
         if params.row_normalisation == RowNormalisation::ClosedScenes {
             engine.normalise_closed_rows(enclosures(scene, accel, seed).closed);
         }

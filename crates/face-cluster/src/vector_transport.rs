@@ -37,7 +37,10 @@
 //! f B̄ along the node's cone axis with f = (1 − cos θ)/2, the share of its own power a spherical cap of
 //! half-angle θ sends to itself (A_cap/(4πR²), exact for the inside of a sphere); flat (θ < 1e-6 rad), convex
 //! and single-face nodes have none, and a node whose children are single faces refines its self-link into
-//! the faces' links (flat facets exchange more across their shared edge than the cap's share says).
+//! the faces' links (flat facets exchange more across their shared edge than the cap's share says). With
+//! `self_exchange = "traced"` every curved cluster's self-link carries instead its traced self form factor
+//! F_NN and two siblings their traced exchange, both as isotropic irradiance ([`crate::self_exchange`]); a
+//! siblings' link is never refined.
 //! Two patches exchange light by the patch kernel of radlab-hierarchical (exact point-to-polygon factors). A
 //! near single-face source (a neighbour across a shared edge included) is evaluated at each leaf below its
 //! flat receiver, over a patch leaf's Gauss points: a leaf's row then sums exact factors at the same points,
@@ -250,6 +253,34 @@ impl VectorTransport<'_> {
 }
 
 /// A link that transfers nothing but tells the oracle how much it might: form-factor bounds `f_rs`, `f_sr`.
+/// The traced flux per unit radiosity (A F_NN, [`crate::self_exchange`]) that a curved cluster sends onto
+/// itself, where the exchange was traced (`self_exchange = "traced"`); `None` otherwise.
+fn traced_self(node: &FaceNode<'_>) -> Option<f64> {
+    let FaceNode::Cluster(c) = node else {
+        return None;
+    };
+    let n = c.id as usize;
+    let traced = c.ctx.exchange.onto_itself.get(n)?;
+    (c.node().cone.half_angle >= FLAT_CONE && !c.node().is_leaf()).then_some(*traced)
+}
+
+/// The traced flux per unit radiosity that each of two sibling clusters of a curved parent sends onto the
+/// other, where the exchange was traced; `None` for other pairs.
+fn traced_between(recv: &FaceNode<'_>, src: &FaceNode<'_>) -> Option<f64> {
+    let (FaceNode::Cluster(r), FaceNode::Cluster(s)) = (recv, src) else {
+        return None;
+    };
+    if r.id == s.id || !std::sync::Arc::ptr_eq(&r.ctx, &s.ctx) {
+        return None;
+    }
+    let p = r.node().parent()?;
+    if s.node().parent() != Some(p) {
+        return None;
+    }
+    let traced = r.ctx.exchange.between_children.get(p)?;
+    (r.ctx.tree.node(p).cone.half_angle >= FLAT_CONE).then_some(*traced)
+}
+
 fn bound_only(src_id: u32, f_rs: f64, f_sr: f64) -> Link {
     Link {
         source: src_id,
@@ -365,7 +396,20 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
                 return Some(Link::overlapping(src_id));
             }
             let theta = recv.cone().half_angle;
-            if theta < FLAT_CONE || !recv.sees_itself() {
+            if theta < FLAT_CONE {
+                return None;
+            }
+            if let Some(flux) = traced_self(recv) {
+                // Split while it could carry more than ε, into the children's self-links and the traced
+                // exchange between them; kept, it spreads what the node sends onto itself evenly.
+                let f = (flux / recv.area()).min(1.0);
+                return (f > 0.0).then(|| {
+                    let mut l = bound_only(src_id, f, f);
+                    l.coefficient = f;
+                    l
+                });
+            }
+            if !recv.sees_itself() {
                 return None;
             }
             if recv.children_are_faces() {
@@ -386,6 +430,17 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
         if let Some(l) = self.near_face_link(recv, src, src_id) {
             return l;
+        }
+        if let Some(flux) = traced_between(recv, src) {
+            // Children of a node whose self-link is traced: the traced exchange between them, spread evenly
+            // over the receiver; never refined (its total is known, and what their parts exchange is their
+            // own self-links' and their children's).
+            let f = flux / recv.area();
+            return (f > 0.0).then(|| {
+                let mut l = bound_only(src_id, 0.0, 0.0);
+                l.coefficient = f;
+                l
+            });
         }
         let between = rb.centre - sb.centre;
         let dist = between.length();
@@ -489,8 +544,15 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             }
         }
         if target.key() == src.key() {
+            if traced_self(target).is_some() {
+                // A traced self-link: its share of the node's own mean radiosity, on every face alike.
+                return LinkCoefficient::isotropic(link.coefficient);
+            }
             // A self-link: the cap's share f of its own mean radiosity, along its axis.
             return LinkCoefficient::vector(target.cone().axis * link.coefficient);
+        }
+        if traced_between(target, src).is_some() {
+            return LinkCoefficient::isotropic(link.coefficient);
         }
         let (d, _) = centroid_geometry(target.centroid(), src.centroid());
         let fit =
@@ -507,7 +569,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         link: &Link,
     ) -> Rgb {
         let s = link.source as usize;
-        if !link.clustered || link.source == recv {
+        if !link.clustered
+            || link.source == recv
+            || traced_between(&view.nodes[recv as usize], &view.nodes[s]).is_some()
+        {
             return b[s];
         }
         if view.nodes[s].is_volume() {

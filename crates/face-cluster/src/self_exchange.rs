@@ -1,0 +1,141 @@
+//! The light a face-cluster node sends onto itself, traced once before the solve: its self form factor
+//!
+//!   F_NN = (1/A_N) Σ_{i ∈ N} A_i F_{i→N},
+//!
+//! the share of what the node's faces send that lands on the node's own faces (visibility included), and for
+//! a node P with children a and b the exchange between them, A_a F_ab = A_b F_ba (reciprocity). By the
+//! Nusselt analogy (Cohen & Wallace 1993, §4.9) a cosine-distributed ray from a uniform point of face i lands
+//! on face j with probability F_ij, so one pass of `rays` such rays per input face estimates every node's
+//! self form factor at once: a ray from face i that reaches the front of face j of the same tree adds A_i/rays
+//! to H(P) at the deepest node P holding both, and
+//!
+//!   A_N F_NN = Σ_{P ∈ subtree(N)} H(P),     A_a F_ab = A_b F_ba = H(P)/2.
+//!
+//! A convex node sends nothing onto itself (no ray returns), a spherical cap of half-angle θ seen from
+//! inside sends (1 − cos θ)/2 of its light (inside a sphere of radius R, F_ij = A_j/(4πR²) for any two
+//! parts), and a rough, nearly flat patch of ground something in between; the self-links of [`crate::VectorTransport`] carry these factors where the node's children do
+//! not face each other as a whole (a ridge, a rough patch of terrain), so that light a heightfield sends onto
+//! itself is not lost. Like the hierarchy, this pass reads every input face (O(k · rays) rays); the solve
+//! does not. Each face draws from its own stream (seed, face), and the sums are made in face order, so the
+//! factors do not depend on the number of threads.
+
+use radlab_scene::{Accel, Scene, sampling};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::FaceClusterTree;
+
+/// What a curved face-cluster node sends onto itself (parameter `self_exchange`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SelfExchangeMode {
+    /// Only a concave node (each child's centroid in front of the other's mean plane) has a self-link, with
+    /// its spherical cap's share (1 − cos θ)/2 of its light along its cone's axis, refined into its children's
+    /// pairs while it could carry more than ε. Exact inside a sphere; a ridge or a rough patch of ground has
+    /// none, so its parts exchange no light. The default.
+    #[default]
+    Cap,
+    /// Every curved node's self-link carries its traced F_NN, and siblings the traced exchange between them,
+    /// spread evenly ([`SelfExchange`]): at least [`SELF_RAYS`] rays per input face before the solve.
+    Traced,
+}
+
+impl SelfExchangeMode {
+    /// The name used in parameters.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Cap => "cap",
+            Self::Traced => "traced",
+        }
+    }
+}
+
+/// Rays per input face, at least (default 4): at 1e6 faces, 4e6 rays.
+pub const SELF_RAYS: u32 = 4;
+
+/// Rays in all, at least (default 65,536), shared among the faces in proportion to their areas, so that a
+/// coarse mesh (a room of a dozen triangles) is not estimated from a few dozen rays.
+pub const SELF_RAYS_TOTAL: f64 = 65_536.0;
+
+/// The traced self-exchange of every node of a tree.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SelfExchange {
+    /// Per node: A_N F_NN, the flux per unit radiosity the node sends onto itself.
+    pub onto_itself: Vec<f64>,
+    /// Per node: H(N)/2, the flux per unit radiosity each of its two children sends onto the other
+    /// (0 for a leaf).
+    pub between_children: Vec<f64>,
+}
+
+impl SelfExchange {
+    /// Traces at least `rays` rays from each face of `tree` (and [`SELF_RAYS_TOTAL`] in all) through `accel`
+    /// (its scene's faces), streams from `seed`.
+    pub fn trace(
+        tree: &FaceClusterTree,
+        scene: &Scene,
+        accel: &Accel,
+        seed: u64,
+        rays: u32,
+    ) -> Self {
+        let nodes = tree.nodes();
+        let k = tree.face_order().len();
+        // Position of each scene face in the tree's face order: node N holds face j iff its range holds it.
+        let mut position = vec![0u32; k];
+        for (p, &f) in tree.face_order().iter().enumerate() {
+            position[f as usize] = p as u32;
+        }
+        let total: f64 = tree.roots().map(|n| nodes[n].area).sum();
+        let landings: Vec<Vec<(u32, f64)>> = (0..k)
+            .into_par_iter()
+            .map(|f| {
+                let face = &scene.faces[f];
+                if !(face.area > 0.0) || rays == 0 {
+                    return Vec::new();
+                }
+                let rays = rays.max((SELF_RAYS_TOTAL * face.area / total).ceil() as u32);
+                let polygon = scene.polygon(f);
+                let mut r = sampling::rng(seed, f as u64 ^ 0x7365_6c66_6578_6368);
+                let w = face.area / rays as f64;
+                let mut out = Vec::new();
+                for _ in 0..rays {
+                    let (u, v) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
+                    let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
+                    let d = sampling::cosine_hemisphere(face.normal, u1, u2);
+                    let Some(hit) = accel.intersect_from(f, polygon.point_at(u, v), d) else {
+                        continue;
+                    };
+                    if scene.faces[hit.face].normal.dot(d) >= 0.0 {
+                        continue; // the back of a one-sided face absorbs
+                    }
+                    let to = position[hit.face] as usize;
+                    let mut n = tree.leaf_of_face(f);
+                    while !nodes[n].faces().contains(&to) {
+                        match nodes[n].parent() {
+                            Some(p) => n = p,
+                            None => break,
+                        }
+                    }
+                    if nodes[n].faces().contains(&to) {
+                        out.push((n as u32, w));
+                    }
+                }
+                out
+            })
+            .collect();
+        let mut h = vec![0.0; nodes.len()];
+        for (n, w) in landings.iter().flatten() {
+            h[*n as usize] += w;
+        }
+        let between_children = h.iter().map(|x| 0.5 * x).collect();
+        // Children follow parents (breadth-first): a reverse walk sums each subtree before its parent reads it.
+        let mut onto_itself = h;
+        for i in (0..nodes.len()).rev() {
+            let below: f64 = nodes[i].children().map(|c| onto_itself[c]).sum();
+            onto_itself[i] += below;
+        }
+        Self {
+            onto_itself,
+            between_children,
+        }
+    }
+}

@@ -1,0 +1,55 @@
+//! The traced self-exchange against closed forms: a convex body inside an enclosure sends all its light to the
+//! enclosure (F = 1) and none onto itself, so by reciprocity the enclosure sends the share A_in/A_out to the
+//! body and keeps 1 − A_in/A_out for itself (Siegel & Howell, enclosure and reciprocity relations).
+
+use radlab_face_cluster::{FaceClusterParams, FaceClusterTree, SELF_RAYS, SelfExchange};
+use radlab_scene::{Accel, builtin};
+
+/// The concentric-spheres scene's two roots, inner (facing out) first, with their traced self-shares.
+fn concentric(threads: usize) -> (FaceClusterTree, SelfExchange) {
+    let scene = builtin("concentric-spheres?faces=2000").expect("scene");
+    let accel = Accel::new(&scene);
+    let tree = FaceClusterTree::build(&scene, &FaceClusterParams::default()).expect("tree");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    let x = pool.install(|| SelfExchange::trace(&tree, &scene, &accel, 3, SELF_RAYS));
+    (tree, x)
+}
+
+#[test]
+fn an_enclosure_keeps_what_the_body_inside_does_not_take() {
+    let (tree, x) = concentric(2);
+    let roots: Vec<usize> = tree.roots().collect();
+    assert_eq!(roots.len(), 2);
+    let (inner, outer) = {
+        let (a, b) = (roots[0], roots[1]);
+        if tree.node(a).area < tree.node(b).area {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    let (a_in, a_out) = (tree.node(inner).area, tree.node(outer).area);
+    // No ray from a convex surface returns to it.
+    assert_eq!(x.onto_itself[inner], 0.0);
+    // F_out,out = 1 − A_in/A_out in expectation. Each face i casts n_i ≥ 65,536 A_i/A_total rays of weight
+    // A_i/n_i, each a Bernoulli trial, so the estimate's variance is at most Σ A_i²/(4 n_i) ≤ A_out A_total /
+    // (4 · 65,536), over A_out²: a standard deviation of at most √(A_total / (4 · 65,536 · A_out)).
+    let f = x.onto_itself[outer] / a_out;
+    let want = 1.0 - a_in / a_out;
+    let sigma = ((a_in + a_out) / (4.0 * 65_536.0 * a_out)).sqrt();
+    assert!(
+        (f - want).abs() <= 4.0 * sigma,
+        "F_out,out = {f}, want {want} ± {:.2e}",
+        4.0 * sigma
+    );
+}
+
+#[test]
+fn one_and_two_threads_trace_the_same_bits() {
+    let (_, one) = concentric(1);
+    let (_, two) = concentric(2);
+    assert_eq!(one, two);
+}
