@@ -252,7 +252,6 @@ impl VectorTransport<'_> {
     }
 }
 
-/// A link that transfers nothing but tells the oracle how much it might: form-factor bounds `f_rs`, `f_sr`.
 /// The traced flux per unit radiosity (A F_NN, [`crate::self_exchange`]) that a curved cluster sends onto
 /// itself, where the exchange was traced (`self_exchange = "traced"`); `None` otherwise.
 fn traced_self(node: &FaceNode<'_>) -> Option<f64> {
@@ -281,6 +280,7 @@ fn traced_between(recv: &FaceNode<'_>, src: &FaceNode<'_>) -> Option<f64> {
     (r.ctx.tree.node(p).cone.half_angle >= FLAT_CONE).then_some(*traced)
 }
 
+/// A link that transfers nothing but tells the oracle how much it might: form-factor bounds `f_rs`, `f_sr`.
 fn bound_only(src_id: u32, f_rs: f64, f_sr: f64) -> Link {
     Link {
         source: src_id,
