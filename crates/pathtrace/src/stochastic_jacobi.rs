@@ -3,6 +3,9 @@
 //!
 //! ΔP^(0) = A E,   ΔP_j^(k+1) = ρ_j Σ_i F_ij ΔP_i^(k),   P = Σ_k ΔP^(k),
 //!
+//! where ΔP_i is the power shot from all of element i: ρ_i / o_i times what its open part received, o_i its
+//! open fraction (the open-area system of mesh_radiosity.rs; o_i = 1 where nothing is sealed).
+//!
 //! each transfer estimated by shooting particles of equal scalar power u = Σ_e A_e Ē_e / N: generation k
 //! shoots n_k particles, n_k the stochastic rounding of Ē(ΔP^(k))/u (so E[n_k u] = Ē(ΔP^(k)) exactly), each from
 //! an element chosen with probability Ē(ΔP_i^(k)) / Ē(ΔP^(k)), at a uniform point, cosine-distributed,
@@ -67,7 +70,7 @@ pub(crate) fn run(t: &Transport, particles: u64, seed: u64) -> (Vec<Rgb>, u64) {
             rays += wave;
             for (j, power) in landed.into_iter().flatten() {
                 incident[j] += power;
-                let reflected = power * t.reflectance(j);
+                let reflected = t.reflected(j, power);
                 if reflected.max_element() > 0.0 {
                     if next[j] == Rgb::ZERO {
                         touched.push(j);
