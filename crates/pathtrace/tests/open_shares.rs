@@ -11,6 +11,9 @@
 //! 1, 0) covered columns, which the tests check first (a probe point within a few gaps of an edge could
 //! see out through the gap; at these sizes that has probability well under 1 % per point).
 
+mod common;
+
+use common::{mc_params, mean_se, on_threads, step_values};
 use glam::{DVec3, dvec3};
 use radlab_pathtrace::*;
 use radlab_scene::{
@@ -92,27 +95,6 @@ fn nominal_open(scene: &Scene, lamp: bool, solver: &McRadiositySolver) -> Vec<f6
         .collect()
 }
 
-/// Step estimates of an area-weighted quantity recovered from its running means m_k = (1/k) Σ_{i≤k} x_i.
-fn step_values(running: &[f64]) -> Vec<f64> {
-    (0..running.len())
-        .map(|i| {
-            if i == 0 {
-                running[0]
-            } else {
-                (i + 1) as f64 * running[i] - i as f64 * running[i - 1]
-            }
-        })
-        .collect()
-}
-
-/// Mean and standard error of the mean.
-fn mean_se(x: &[f64]) -> (f64, f64) {
-    let k = x.len() as f64;
-    let m = x.iter().sum::<f64>() / k;
-    let var = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k - 1.0);
-    (m, (var / k).sqrt())
-}
-
 #[test]
 fn a_furnace_with_a_panel_in_front_of_its_floor_keeps_e_over_one_minus_rho() {
     // Closed, E = 1 and ρ = 0.5 everywhere: every open part has B = E/(1 − ρ) = 2 (the open-area system's
@@ -125,13 +107,7 @@ fn a_furnace_with_a_panel_in_front_of_its_floor_keeps_e_over_one_minus_rho() {
     let scene = box_with_panel(rho, e, false);
     let accel = Accel::new(&scene);
     for method in [McMethod::RandomWalk, McMethod::StochasticJacobi] {
-        let p = McRadiosityParams {
-            element_size: Some(ELEMENT),
-            particles_per_step: 20_000,
-            max_steps: 16,
-            method,
-            ..Default::default()
-        };
+        let p = mc_params(ELEMENT, 20_000, 16, method);
         let mut s = McRadiositySolver::new(&scene, &accel, p, 5).expect("solver");
         while s.step().expect("step") == Step::Continue {}
         let open = nominal_open(&scene, false, &s);
@@ -191,13 +167,7 @@ fn energy_is_balanced_across_sealed_contacts() {
         .sum();
     let window = 4.0 * ((HI - LO) + (LAMP_HI - LAMP_LO)) * GAP;
     for method in [McMethod::RandomWalk, McMethod::StochasticJacobi] {
-        let p = McRadiosityParams {
-            element_size: Some(ELEMENT),
-            particles_per_step: 60_000,
-            max_steps: 12,
-            method,
-            ..Default::default()
-        };
+        let p = mc_params(ELEMENT, 60_000, 12, method);
         let mut s = McRadiositySolver::new(&scene, &accel, p, 11).expect("solver");
         let mut absorbed = Vec::new();
         loop {
@@ -251,13 +221,7 @@ fn open_shares_are_identical_for_one_and_two_threads() {
     let accel = Accel::new(&scene);
     let run = || {
         [McMethod::RandomWalk, McMethod::StochasticJacobi].map(|method| {
-            let p = McRadiosityParams {
-                element_size: Some(ELEMENT),
-                particles_per_step: 2_000,
-                max_steps: 2,
-                method,
-                ..Default::default()
-            };
+            let p = mc_params(ELEMENT, 2_000, 2, method);
             let mut s = McRadiositySolver::new(&scene, &accel, p, 3).expect("solver");
             while s.step().expect("step") == Step::Continue {}
             (
@@ -268,14 +232,7 @@ fn open_shares_are_identical_for_one_and_two_threads() {
             )
         })
     };
-    let in_pool = |n: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .expect("pool")
-            .install(run)
-    };
-    let (one, two) = (in_pool(1), in_pool(2));
+    let (one, two) = (on_threads(1, run), on_threads(2, run));
     assert!(
         one == two,
         "open shares or radiosities differ between 1 and 2 threads"
