@@ -131,7 +131,7 @@ impl MethodParams for McRadiosityParams {
             (
                 "reconstruction",
                 "point answers from the element values: constant | gouraud | final-gather; default gouraud (Cornell box, \
-                 512 points: relative L1 4.7% against 6.4% constant at 55 mm elements, 2.6% / 4.1% at 35 mm; final-gather \
+                 512 points: relative L1 4.75% against 6.4% constant at 55 mm elements, 2.6% / 4.1% at 35 mm; final-gather \
                  0.9% at 55 mm, for 7% more rays at 512 points and rays at every query)",
             ),
         ]
