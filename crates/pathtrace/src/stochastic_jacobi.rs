@@ -1,10 +1,10 @@
 //! Stochastic Jacobi iteration for radiosity (Neumann, Feda, Kopp & Tobler 1995, "A new stochastic radiosity
 //! method for highly complex scenes"; Bekaert 1999, §5.2, incremental shooting):
 //!
-//! ΔP^(0) = A E,   ΔP_j^(k+1) = ρ_j Σ_i F_ij ΔP_i^(k),   P = Σ_k ΔP^(k),
+//! ΔP^(0) = A E,   ΔP_j^(k+1) = (ρ_j / o_j) Σ_i F_ij ΔP_i^(k),   P = Σ_k ΔP^(k),
 //!
-//! where ΔP_i is the power shot from all of element i: ρ_i / o_i times what its open part received, o_i its
-//! open fraction (the open-area system of mesh_radiosity.rs; o_i = 1 where nothing is sealed).
+//! with ΔP_i the power shot from uniform points of all of element i and o_i its open fraction (1 where nothing
+//! is sealed): the open part's power divided by o_i, as the open-area system of mesh_radiosity.rs requires.
 //!
 //! each transfer estimated by shooting particles of equal scalar power u = Σ_e A_e Ē_e / N: generation k
 //! shoots n_k particles, n_k the stochastic rounding of Ē(ΔP^(k))/u (so E[n_k u] = Ē(ΔP^(k)) exactly), each from
