@@ -6,7 +6,7 @@
 //! with ΔP_i the power shot from uniform points of all of element i and o_i its open fraction (1 where nothing
 //! is sealed): the open part's power divided by o_i, as the open-area system of mesh_radiosity.rs requires.
 //!
-//! each transfer estimated by shooting particles of equal scalar power u = Σ_e A_e Ē_e / N: generation k
+//! Each transfer is estimated by shooting particles of equal scalar power u = Σ_e A_e Ē_e / N: generation k
 //! shoots n_k particles, n_k the stochastic rounding of Ē(ΔP^(k))/u (so E[n_k u] = Ē(ΔP^(k)) exactly), each from
 //! an element chosen with probability Ē(ΔP_i^(k)) / Ē(ΔP^(k)), at a uniform point, cosine-distributed,
 //! carrying ΔP_i^(k) · u/Ē(ΔP_i^(k)). Given ΔP^(k), the expected power landing on j is Σ_i F_ij ΔP_i^(k), so
