@@ -4,10 +4,12 @@
 //! N particles each start on an emitting element e chosen with probability A_e Ē_e / Σ, at a uniform point,
 //! carrying power A_e E_e / (N p_e) = E_e · (Σ/N) / Ē_e (scalar power Σ/N). A flight lands on element j
 //! with probability F_ij; every landing tallies the particle's power into Φ_j (collision estimator). The
-//! particle then survives with probability q = Ē(ρ_j ⊙ P)/Ē(P) (ρ_j for grey surfaces), its power becoming
-//! ρ_j ⊙ P / q (so its scalar power never changes), and is re-emitted from a *uniform* point of element j —
-//! which makes the walk a Markov chain over elements with transition ρ_j F_jk, so its tallies are unbiased
-//! estimates of the incident powers of the discrete system, E[Φ_j] = Σ_i F_ij P_i.
+//! particle then survives with probability q = min(1, Ē(R)/Ē(P)) with R = ρ_j ⊙ P / o_j (o_j the element's
+//! open fraction, 1 unless part of it is sealed; ρ_j / o_j for grey surfaces), its power becoming R / q (so its
+//! scalar power does not change while q < 1), and is re-emitted from a *uniform* point of element j — which
+//! makes the walk a Markov chain over elements with transition ρ_j F_jk / o_j, so its tallies are unbiased
+//! estimates of the incident powers of the discrete open-area system (mesh_radiosity.rs),
+//! E[Φ_j] = Σ_i F_ij P_i / o_i with P_i = o_i A_i B_i.
 //!
 //! Walks advance together one flight per round (a wavefront, [`WAVE`] walks at a time) so the deposits of a
 //! round are summed in walk order: the same sums for any number of threads.
@@ -63,7 +65,7 @@ pub(crate) fn shoot_walks(t: &Transport, particles: u64, first: u64, seed: u64) 
                         return (None, None);
                     };
                     let deposit = Some((j, w.power));
-                    let kept = w.power * t.reflectance(j);
+                    let kept = t.reflected(j, w.power);
                     let q = (channel_mean(kept) / channel_mean(w.power)).min(1.0);
                     if q.is_nan() || q <= 0.0 || sampling::uniform(&mut w.rng) >= q {
                         return (deposit, None);

@@ -1,9 +1,12 @@
 //! Stochastic Jacobi iteration for radiosity (Neumann, Feda, Kopp & Tobler 1995, "A new stochastic radiosity
 //! method for highly complex scenes"; Bekaert 1999, §5.2, incremental shooting):
 //!
-//! ΔP^(0) = A E,   ΔP_j^(k+1) = ρ_j Σ_i F_ij ΔP_i^(k),   P = Σ_k ΔP^(k),
+//! ΔP^(0) = A E,   ΔP_j^(k+1) = (ρ_j / o_j) Σ_i F_ij ΔP_i^(k),   P = Σ_k ΔP^(k),
 //!
-//! each transfer estimated by shooting particles of equal scalar power u = Σ_e A_e Ē_e / N: generation k
+//! with ΔP_i the power shot from uniform points of all of element i and o_i its open fraction (1 where nothing
+//! is sealed): the open part's power divided by o_i, as the open-area system of mesh_radiosity.rs requires.
+//!
+//! Each transfer is estimated by shooting particles of equal scalar power u = Σ_e A_e Ē_e / N: generation k
 //! shoots n_k particles, n_k the stochastic rounding of Ē(ΔP^(k))/u (so E[n_k u] = Ē(ΔP^(k)) exactly), each from
 //! an element chosen with probability Ē(ΔP_i^(k)) / Ē(ΔP^(k)), at a uniform point, cosine-distributed,
 //! carrying ΔP_i^(k) · u/Ē(ΔP_i^(k)). Given ΔP^(k), the expected power landing on j is Σ_i F_ij ΔP_i^(k), so
@@ -67,7 +70,7 @@ pub(crate) fn run(t: &Transport, particles: u64, seed: u64) -> (Vec<Rgb>, u64) {
             rays += wave;
             for (j, power) in landed.into_iter().flatten() {
                 incident[j] += power;
-                let reflected = power * t.reflectance(j);
+                let reflected = t.reflected(j, power);
                 if reflected.max_element() > 0.0 {
                     if next[j] == Rgb::ZERO {
                         touched.push(j);

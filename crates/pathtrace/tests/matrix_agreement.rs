@@ -49,13 +49,7 @@ fn mesh_monte_carlo_radiosity_agrees_with_matrix_radiosity_on_the_same_mesh() {
         // (Bonferroni), hence 5. The sharp test for a bias is the mean of z² over all comparisons: 63/61 under
         // agreement, with a spread of about 0.05–0.08 (the channels are correlated), so [0.75, 1.35] is a ±4σ
         // band; a bias of a third of a standard error on every element would leave it.
-        let p = McRadiosityParams {
-            element_size: Some(h),
-            particles_per_step: 10_000,
-            max_steps: 64,
-            method,
-            ..Default::default()
-        };
+        let p = mc_params(h, 10_000, 64, method);
         let mut s = McRadiositySolver::new(&scene, &accel, p, 2024).expect("mc solver");
         while s.step().expect("mc step") == Step::Continue {}
         assert_eq!(s.mesh().len(), fine.len());

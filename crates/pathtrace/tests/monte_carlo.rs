@@ -287,13 +287,7 @@ fn mc_radiosity_error_falls_as_one_over_sqrt_particles() {
         let errors: Vec<f64> = ns
             .iter()
             .map(|&n| {
-                let p = McRadiosityParams {
-                    element_size: Some(0.25),
-                    particles_per_step: n,
-                    max_steps: 1,
-                    method,
-                    ..Default::default()
-                };
+                let p = mc_params(0.25, n, 1, method);
                 let mut s = McRadiositySolver::new(&scene, &accel, p, 500 + n).expect("solver");
                 assert_eq!(s.step().expect("step"), Step::Converged);
                 let b = s.element_radiosity();
@@ -324,13 +318,7 @@ fn mc_radiosity_furnace_is_unbiased_from_rho_0_to_0_999() {
         let accel = Accel::new(&scene);
         let exact = 1.0 / (1.0 - rho);
         for method in [McMethod::RandomWalk, McMethod::StochasticJacobi] {
-            let p = McRadiosityParams {
-                element_size: Some(0.34),
-                particles_per_step: particles,
-                max_steps: steps,
-                method,
-                ..Default::default()
-            };
+            let p = mc_params(0.34, particles, steps, method);
             let mut s = McRadiositySolver::new(&scene, &accel, p, 7).expect("solver");
             let mut area_means = Vec::new();
             let area: Vec<f64> = s.mesh().elements.iter().map(|e| e.area).collect();
@@ -373,18 +361,7 @@ fn mc_radiosity_furnace_is_unbiased_from_rho_0_to_0_999() {
             // The area-weighted mean, with its standard error from the spread of the step estimates
             // (recovered from the running means).
             let k = area_means.len();
-            let step_values: Vec<f64> = (0..k)
-                .map(|i| {
-                    if i == 0 {
-                        area_means[0]
-                    } else {
-                        (i + 1) as f64 * area_means[i] - i as f64 * area_means[i - 1]
-                    }
-                })
-                .collect();
-            let m = step_values.iter().sum::<f64>() / k as f64;
-            let var = step_values.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k - 1) as f64;
-            let se_mean = (var / k as f64).sqrt();
+            let (_, se_mean) = mean_se(&step_values(&area_means));
             assert!(
                 (area_means[k - 1] - exact).abs() <= 4.0 * se_mean,
                 "{method:?} rho={rho}: mean {} ± {se_mean} vs {exact}",
@@ -409,13 +386,7 @@ fn mc_radiosity_direct_light_matches_element_form_factors() {
     let accel = Accel::new(&scene);
     let emitter = scene.polygon(1);
     for method in [McMethod::RandomWalk, McMethod::StochasticJacobi] {
-        let p = McRadiosityParams {
-            element_size: Some(0.2),
-            particles_per_step: 10_000,
-            max_steps: 24,
-            method,
-            ..Default::default()
-        };
+        let p = mc_params(0.2, 10_000, 24, method);
         let mut s = McRadiositySolver::new(&scene, &accel, p, 99).expect("solver");
         while s.step().expect("step") == Step::Continue {}
         let se = s.element_std_error().expect("se");
@@ -467,10 +438,12 @@ fn mc_radiosity_converges_after_max_steps_under_defaults() {
     assert_eq!(s.stats().steps, max);
     assert_eq!(s.step().expect("after"), Step::Converged);
     assert_eq!(s.stats().steps, max, "steps after convergence do nothing");
+    // One flight per particle (ρ = 0 receiver), plus the open-fraction estimate's first step: 16 probe points
+    // per element, each open at its first ray (nothing is sealed: every ray escapes or meets a front).
     assert_eq!(
         s.stats().rays,
-        max * 500,
-        "ρ = 0 receiver: one flight per particle"
+        max * 500 + 16 * s.mesh().len() as u64,
+        "ρ = 0 receiver: one flight per particle, one probe ray per open-fraction point"
     );
     assert!(s.stats().bytes > 0 && s.stats().elements == s.mesh().len() as u64);
     // radiosity_at answers with the element containing the point.
@@ -564,13 +537,7 @@ fn results_are_identical_for_one_and_two_threads() {
         );
         let mut mc = Vec::new();
         for method in [McMethod::RandomWalk, McMethod::StochasticJacobi] {
-            let p = McRadiosityParams {
-                element_size: Some(0.25),
-                particles_per_step: 3_000,
-                max_steps: 2,
-                method,
-                ..Default::default()
-            };
+            let p = mc_params(0.25, 3_000, 2, method);
             let mut s = McRadiositySolver::new(&scene, &accel, p, 8).expect("solver");
             s.step().expect("step");
             s.step().expect("step");
@@ -582,15 +549,8 @@ fn results_are_identical_for_one_and_two_threads() {
         }
         (pe, img, mc)
     };
-    let in_pool = |n: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .expect("pool")
-            .install(run)
-    };
-    let one = in_pool(1);
-    let two = in_pool(2);
+    let one = on_threads(1, run);
+    let two = on_threads(2, run);
     assert!(
         one.0 == two.0,
         "point estimates differ between 1 and 2 threads"
@@ -729,12 +689,7 @@ fn an_emitter_facing_away_lights_nothing() {
     for e in estimate_points(&scene, &accel, &pts, &params(256, DirectSampling::Mis), 1) {
         assert_eq!((e.mean, e.std_error), (Rgb::ZERO, Rgb::ZERO));
     }
-    let p = McRadiosityParams {
-        element_size: Some(0.25),
-        particles_per_step: 2_000,
-        max_steps: 2,
-        ..Default::default()
-    };
+    let p = mc_params(0.25, 2_000, 2, McMethod::default());
     let mut s = McRadiositySolver::new(&scene, &accel, p, 1).expect("solver");
     s.step().expect("step");
     for e in s.mesh().elements_of(0) {

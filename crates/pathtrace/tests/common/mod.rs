@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use glam::{DVec3, dvec3};
-use radlab_pathtrace::{PointEstimate, SurfacePoint};
+use radlab_pathtrace::{McMethod, McRadiosityParams, PointEstimate, SurfacePoint};
 use radlab_scene::{FaceId, Material, Rgb, Scene, SceneBuilder, sampling};
 
 /// Adds an n × n grid of quads over the parallelogram o + s·u + t·v (normal along u × v).
@@ -212,6 +212,53 @@ pub fn assert_within(e: &PointEstimate, exact: Rgb, k: f64, what: &str) {
             (m - x) / se
         );
     }
+}
+
+/// Mesh Monte Carlo radiosity parameters: `element_size`, `particles` per step, `steps`, `method`; the rest
+/// default.
+pub fn mc_params(
+    element_size: f64,
+    particles: u64,
+    steps: u64,
+    method: McMethod,
+) -> McRadiosityParams {
+    McRadiosityParams {
+        element_size: Some(element_size),
+        particles_per_step: particles,
+        max_steps: steps,
+        method,
+        ..Default::default()
+    }
+}
+
+/// The step estimates x_k of a quantity recovered from its running means m_k = (1/k) Σ_{i≤k} x_i.
+pub fn step_values(running: &[f64]) -> Vec<f64> {
+    (0..running.len())
+        .map(|i| {
+            if i == 0 {
+                running[0]
+            } else {
+                (i + 1) as f64 * running[i] - i as f64 * running[i - 1]
+            }
+        })
+        .collect()
+}
+
+/// Mean and standard error of the mean of independent estimates.
+pub fn mean_se(x: &[f64]) -> (f64, f64) {
+    let k = x.len() as f64;
+    let m = x.iter().sum::<f64>() / k;
+    let var = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k - 1.0);
+    (m, (var / k).sqrt())
+}
+
+/// `run` on a rayon pool of `n` threads.
+pub fn on_threads<R: Send>(n: usize, run: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .expect("pool")
+        .install(run)
 }
 
 /// Least-squares slope of ln y against ln x.
