@@ -86,9 +86,10 @@ pub struct McRadiosityParams {
     /// Cap on bounces per particle (random walk) or generations per step (stochastic Jacobi); default 100,000.
     /// Russian roulette ends walks without bias; the cap only guards against runaway walks.
     pub max_depth: u32,
-    /// How radiosity at a point is answered from the element values (default `gouraud`, chosen by
-    /// measurement against `constant`; a final gather is more accurate, averaging out the elements' noise and
-    /// seeing which points are sealed, but costs a gather per query).
+    /// How radiosity at a point is answered from the element values (default `final-gather`, chosen by
+    /// measurement: it averages out the elements' noise and sees which points are sealed, for a gather per
+    /// query; at 512 points on the Cornell box it costs 7% more rays than the solve and is 5× as accurate as
+    /// `gouraud`).
     pub reconstruction: Reconstruction,
 }
 
@@ -100,7 +101,7 @@ impl Default for McRadiosityParams {
             max_steps: 100,
             method: McMethod::RandomWalk,
             max_depth: DEFAULT_MAX_DEPTH,
-            reconstruction: Reconstruction::Gouraud,
+            reconstruction: Reconstruction::FinalGather,
         }
     }
 }
@@ -130,9 +131,10 @@ impl MethodParams for McRadiosityParams {
             ),
             (
                 "reconstruction",
-                "point answers from the element values: constant | gouraud | final-gather; default gouraud (Cornell box, \
-                 512 points: relative L1 4.75% against 6.4% constant at 55 mm elements, 2.6% / 4.1% at 35 mm; final-gather \
-                 0.9% at 55 mm, for 7% more rays at 512 points and rays at every query)",
+                "point answers from the element values: constant | gouraud | final-gather; default final-gather (512 \
+                 points, relative L1: Cornell box at 55 mm elements 0.93% against 4.75% gouraud and 6.4% constant, for 7% \
+                 more rays; furnished room 0.48% against 5.5% gouraud, whose sealed points under the floor covering take \
+                 their elements' open value; empty room 0.25% against 1.6%)",
             ),
         ]
     }

@@ -177,15 +177,6 @@ const EXCEPTIONS: &[Exception] = &[
     },
     Exception {
         method: "mc-radiosity",
-        case: "fan with a near-zero-area face in a furnace",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 0.90 (2026-11-30): the point on the tiny triangle reads B = E.
-        reason: "an element of area 2.5e-8 catches no particle out of 2e4 (expected count 5e-4), so its \
-                 reflected radiosity is estimated as 0; only the particle budget can fix it",
-    },
-    Exception {
-        method: "mc-radiosity",
         case: "furnace cube ρ=0.999",
         expect: Expect::Finite,
         overrides: &[("particles_per_step", "100"), ("max_steps", "1")],
