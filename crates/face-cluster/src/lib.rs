@@ -68,10 +68,17 @@
 //! reference at 1,024 points (noise floor 1.2%) 3.60% relative L1 with constant answers and 2.82% with
 //! Gouraud's (3.87% and 3.36% before).
 //!
+//! Measured again with the traced self-exchange as the default (release, idle machine, 2026-11-30): 10⁶
+//! faces end to end with a cold cache, 21.3 s wall, 2.48 GiB peak RSS; the solve 1.13 s (52.8k links);
+//! 5.49M rays, 4.06M of them the trace (which adds 0.7–0.8 s wall, 2.4 s CPU to the setup against `cap`,
+//! warm cache); 3.60% relative L1 constant and 2.82% Gouraud, as before (the bumpy sphere's nodes exchange
+//! nothing within).
+//!
 //! Where the solve does well and badly (measured on concentric spheres, a furnace with B = E/(1 − ρ), through
 //! the operator's row sums: [`radlab_hierarchical::Engine::row_sums`], the irradiance each leaf gathers when
 //! every leaf sends B = 1, one in a closed scene):
-//! - At 600 faces, ρ = 0.5 and the defaults, the furnace's area mean is 0.16% low (the test
+//! - At 600 faces, ρ = 0.5 and the defaults, the furnace's area mean is 0.16% low (0.18% with the traced
+//!   self-exchange; the test
 //!   `concentric_spheres_furnace_mean_within_one_percent`); the rows sum to 0.990 on the inner sphere and 1.000
 //!   on the outer, so ρ = 0.9 is 1.9% low and ρ = 0.99 19% low. Two causes were found and removed. (1) A pair
 //!   whose sampled visibility segments were all blocked was dropped, so a partly hidden source was lost whole
@@ -89,7 +96,8 @@
 //!   the default ε; the engine reports a solution that keeps growing as an error rather than stopping at its
 //!   step cap; at ε = 1e-5 the 192-face sphere converges 4.6% high, at 1e-6 within 1e-9); the 48-face sphere
 //!   of the conformance suite is refined to its faces and its rows sum to one.
-//! - Terrain: relative L1 stays at 6.7–7.2% on the 10⁵-face terrain whatever ε (1e-4 … 1e-5), and at 4.2–5.3%
+//! - Terrain, with `self_exchange = "cap"` (2,048-path references): relative L1 stays at 6.7–7.2% on the
+//!   10⁵-face terrain whatever ε (1e-4 … 1e-5), and at 4.2–5.3%
 //!   on the 10⁴-face one even at the radiosity norm with ε = 1e-3 (3.5M links); volume clusters (α) reach
 //!   1.2% on the 10⁵-face terrain and hierarchical radiosity 0.9% on the 10⁴-face one. The answers are 3–4%
 //!   low at every brightness. Against
@@ -101,16 +109,19 @@
 //!   brought the 2,000-face total to +0.3%, but cost 15–45× (10⁵ faces: 0.45 s → 19.9 s, 57k → 636k links):
 //!   the pairs of touching children that refinement makes carry nothing while kept (their bound
 //!   min(1, A_S/A_R) splits them along every shared boundary), and the concave nodes it reaches take the same
-//!   path. `self_exchange = "traced"` ([`self_exchange`]) gives every curved node's self-link its traced
-//!   F_NN and each pair of siblings their traced exchange, kept whole. `radlab run` on the terrain, 1,024
-//!   points, 4,096-path reference, constant answers, ε = 1e-4 / 1e-5 / 1e-6, relative L1 `cap` → `traced`:
-//!   10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.5%, 10⁵ faces 6.3 / 5.6 / 5.3% → 5.0 / 3.6 / 2.9%; median point
-//!   −3.2 … −4.4% → +0.1 … +1.1%; links within 1.5% of each other (57.3k / 57.6k at 10⁵, ε = 1e-4), the trace
-//!   0.4M rays at 10⁵ faces. It is not the default because exactness inside closed concave meshes is lost: a
-//!   traced F_NN has noise, and at ρ = 0.999 the 48-face furnace sphere diverges and the 192-face one
-//!   converges 4.1× high.
-//! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 2.5% low at the defaults and 1.1% low at
-//!   ε = 1e-5 (`room_of_cubes_furnace`). Before (2) it was 16% low: links to a whole cube are kept below ε
+//!   path. The default `self_exchange = "traced"` ([`self_exchange`]) traces every node's F_NN before the
+//!   solve and gives one-sided nodes' self-links and siblings the traced light, kept whole. `radlab run` on the
+//!   terrain, 1,024 points, 4,096-path reference, constant answers, ε = 1e-4 / 1e-5 / 1e-6, relative L1
+//!   `cap` → `traced`: 10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.5%, 10⁵ faces 6.3 / 5.6 / 5.3% → 5.0 /
+//!   3.6 / 2.9%; median point −3.2 … −4.4% → +0.05 … +1.1%; links within 1.5% (57.3k / 57.6k at 10⁵,
+//!   ε = 1e-4), solve times within 10%; the trace 0.4M rays at 10⁵ faces (setup 0.17 → 0.29 s). The bumpy
+//!   sphere answers bit for bit alike in both modes at 10⁴ and 10⁵ faces (3.75%, 3.77%); the 10⁴-face
+//!   concentric spheres (ρ = 0.5) 0.62% → 0.52% in 1.91 → 0.99 s (285k → 133k links), since the outer
+//!   sphere's one-sided caps no longer refine their touching children. Closed concave meshes near ρ = 1 lose
+//!   exactness: a traced F_NN has noise, and the 48-face furnace sphere at ρ = 0.999 (rows exact with `cap`,
+//!   refined to its faces) diverges; `row_normalisation = "closed-scenes"` holds it (tested).
+//! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 1.9% low at the defaults and 0.8% low at
+//!   ε = 1e-5 (`room_of_cubes_furnace`; 2.5% and 1.1% with `self_exchange = "cap"`). Before (2) it was 16% low: links to a whole cube are kept below ε
 //!   although its cone straddles every direction, and the vectors from opposite sides cancelled. Refusing
 //!   such links whatever they carry, the other way out, refined the 10⁵-face bumpy sphere to its faces (61k →
 //!   11.6M links, 0.89 s → 178 s of solve).

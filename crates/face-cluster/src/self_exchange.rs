@@ -32,11 +32,15 @@ pub enum SelfExchangeMode {
     /// Only a concave node (each child's centroid in front of the other's mean plane) has a self-link, with
     /// its spherical cap's share (1 − cos θ)/2 of its light along its cone's axis, refined into its children's
     /// pairs while it could carry more than ε. Exact inside a sphere; a ridge or a rough patch of ground has
-    /// none, so its parts exchange no light. The default.
-    #[default]
+    /// none, so its parts exchange no light.
     Cap,
-    /// Every curved node's self-link carries its traced F_NN, and siblings the traced exchange between them,
-    /// spread evenly ([`SelfExchange`]): at least [`SELF_RAYS`] rays per input face before the solve.
+    /// A one-sided curved node (normal cone narrower than 90°) has a self-link carrying its traced F_NN, and
+    /// two one-sided siblings a link carrying the traced exchange between them, never refined; both spread
+    /// evenly over the receiver ([`SelfExchange`]; at least [`SELF_RAYS`] rays per input face before the
+    /// solve). A wider node (a closed part, a slab's top and bottom) keeps the cap's rule if it is concave;
+    /// otherwise its self-link carries nothing and is refined while its traced F_NN could carry more than ε.
+    /// The default.
+    #[default]
     Traced,
 }
 

@@ -63,7 +63,7 @@ pub struct FaceClusterSolveParams {
     /// method then linear in k. Default [`RowNormalisation::Off`].
     #[serde(default)]
     pub row_normalisation: RowNormalisation,
-    /// What curved nodes send onto themselves ([`SelfExchangeMode`]). Default [`SelfExchangeMode::Cap`].
+    /// What curved nodes send onto themselves ([`SelfExchangeMode`]). Default [`SelfExchangeMode::Traced`].
     #[serde(default)]
     pub self_exchange: SelfExchangeMode,
 }
@@ -81,7 +81,7 @@ impl Default for FaceClusterSolveParams {
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
             row_normalisation: RowNormalisation::Off,
-            self_exchange: SelfExchangeMode::Cap,
+            self_exchange: SelfExchangeMode::Traced,
         }
     }
 }
@@ -114,7 +114,10 @@ impl MethodParams for FaceClusterSolveParams {
         ));
         d.push((
             "self_exchange",
-            "cap (default: a concave node's self-link carries its spherical cap's share, exact inside a sphere;              other curved nodes exchange nothing within) | traced (at least 4 rays from every face before the              solve estimate every curved node's self form factor and its children's exchange, carried evenly;              terrain's light onto itself is kept, but closed concave scenes near rho = 1 diverge)",
+            "traced (default: at least 4 rays from every face before the solve estimate every curved node's \
+             self form factor and its children's exchange, carried evenly, so a terrain's light onto itself is kept; \
+             closed concave meshes near rho = 1 need row_normalisation) | cap (only a concave node's self-link, \
+             carrying its spherical cap's share, exact inside a sphere; other curved nodes exchange nothing within)",
         ));
         d
     }
@@ -155,7 +158,7 @@ impl MethodParams for FaceClusterSolveParams {
             .chain([
                 ("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}")),
                 ("row_normalisation".to_string(), "\"off\"".to_string()),
-                ("self_exchange".to_string(), "\"cap\"".to_string()),
+                ("self_exchange".to_string(), "\"traced\"".to_string()),
             ])
             .collect()
     }
@@ -188,7 +191,7 @@ impl MethodParams for FaceClusterSolveParams {
             })?,
         };
         let self_exchange = match table.remove("self_exchange") {
-            None => SelfExchangeMode::Cap,
+            None => SelfExchangeMode::Traced,
             Some(v) => v.try_into().map_err(|e: toml::de::Error| {
                 SolveError::param(
                     "self_exchange",

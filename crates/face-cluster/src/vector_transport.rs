@@ -37,10 +37,13 @@
 //! f B̄ along the node's cone axis with f = (1 − cos θ)/2, the share of its own power a spherical cap of
 //! half-angle θ sends to itself (A_cap/(4πR²), exact for the inside of a sphere); flat (θ < 1e-6 rad), convex
 //! and single-face nodes have none, and a node whose children are single faces refines its self-link into
-//! the faces' links (flat facets exchange more across their shared edge than the cap's share says). With
-//! `self_exchange = "traced"` every curved cluster's self-link carries instead its traced self form factor
-//! F_NN and two siblings their traced exchange, both as isotropic irradiance ([`crate::self_exchange`]); a
-//! siblings' link is never refined.
+//! the faces' links (flat facets exchange more across their shared edge than the cap's share says). That is
+//! `self_exchange = "cap"`. By default (`traced`) a one-sided curved cluster (cone narrower than 90°) has a
+//! self-link carrying instead its traced self form factor F_NN, and two one-sided siblings a link carrying
+//! their traced exchange, both as isotropic irradiance ([`crate::self_exchange`]); a siblings' link is never
+//! refined. A wider, convex node's self-link carries nothing and is split while its traced F_NN could carry
+//! more than ε, so that its one-sided parts carry it (spread evenly over a slab, its top's light would reach
+//! its bottom).
 //! Two patches exchange light by the patch kernel of radlab-hierarchical (exact point-to-polygon factors). A
 //! near single-face source (a neighbour across a shared edge included) is evaluated at each leaf below its
 //! flat receiver, over a patch leaf's Gauss points: a leaf's row then sums exact factors at the same points,
@@ -252,19 +255,27 @@ impl VectorTransport<'_> {
     }
 }
 
-/// The traced flux per unit radiosity (A F_NN, [`crate::self_exchange`]) that a curved cluster sends onto
-/// itself, where the exchange was traced (`self_exchange = "traced"`); `None` otherwise.
+/// The traced flux per unit radiosity (A F_NN, [`crate::self_exchange`]) that a one-sided curved cluster
+/// sends onto itself, where the exchange was traced (`self_exchange = "traced"`); `None` otherwise.
 fn traced_self(node: &FaceNode<'_>) -> Option<f64> {
     let FaceNode::Cluster(c) = node else {
         return None;
     };
     let n = c.id as usize;
     let traced = c.ctx.exchange.onto_itself.get(n)?;
-    (c.node().cone.half_angle >= FLAT_CONE && !c.node().is_leaf()).then_some(*traced)
+    (one_sided(node) && !c.node().is_leaf()).then_some(*traced)
 }
 
-/// The traced flux per unit radiosity that each of two sibling clusters of a curved parent sends onto the
-/// other, where the exchange was traced; `None` for other pairs.
+/// Whether a node is curved but every face of it faces one open half-space (normal cone half-angle in
+/// [`FLAT_CONE`], 90°)): light spread evenly over it then reaches faces that could all receive it from some
+/// neighbour. A wider node (a closed part, a slab's top and bottom) would hand its top's light to its bottom.
+fn one_sided(node: &FaceNode<'_>) -> bool {
+    let theta = node.cone().half_angle;
+    (FLAT_CONE..HALF_PI).contains(&theta)
+}
+
+/// The traced flux per unit radiosity that each of two one-sided sibling clusters sends onto the other,
+/// where the exchange was traced; `None` for other pairs.
 fn traced_between(recv: &FaceNode<'_>, src: &FaceNode<'_>) -> Option<f64> {
     let (FaceNode::Cluster(r), FaceNode::Cluster(s)) = (recv, src) else {
         return None;
@@ -277,7 +288,7 @@ fn traced_between(recv: &FaceNode<'_>, src: &FaceNode<'_>) -> Option<f64> {
         return None;
     }
     let traced = r.ctx.exchange.between_children.get(p)?;
-    (r.ctx.tree.node(p).cone.half_angle >= FLAT_CONE).then_some(*traced)
+    (one_sided(recv) && one_sided(src)).then_some(*traced)
 }
 
 /// A link that transfers nothing but tells the oracle how much it might: form-factor bounds `f_rs`, `f_sr`.
@@ -410,7 +421,21 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
                 });
             }
             if !recv.sees_itself() {
-                return None;
+                // A wide node (a closed part, a slab) whose children do not face each other: with traced
+                // factors, split while what it could send onto itself exceeds ε, so that its one-sided parts
+                // carry it; it carries nothing itself.
+                let FaceNode::Cluster(c) = recv else {
+                    return None;
+                };
+                let n = c.id as usize;
+                let f = c
+                    .ctx
+                    .exchange
+                    .onto_itself
+                    .get(n)
+                    .map_or(0.0, |x| x / recv.area());
+                return (f > 0.0 && !c.node().is_leaf())
+                    .then(|| bound_only(src_id, f.min(1.0), f.min(1.0)));
             }
             if recv.children_are_faces() {
                 // Two faces that see each other: the cap's share below underestimates what flat facets
