@@ -77,7 +77,7 @@
 //! Where the solve does well and badly (measured on concentric spheres, a furnace with B = E/(1 − ρ), through
 //! the operator's row sums: [`radlab_hierarchical::Engine::row_sums`], the irradiance each leaf gathers when
 //! every leaf sends B = 1, one in a closed scene):
-//! - At 600 faces, ρ = 0.5 and the defaults, the furnace's area mean is 0.16% low (0.18% with the traced
+//! - At 600 faces, ρ = 0.5 and the defaults, the furnace's area mean is 0.16% low (0.21% with the traced
 //!   self-exchange; the test
 //!   `concentric_spheres_furnace_mean_within_one_percent`); the rows sum to 0.990 on the inner sphere and 1.000
 //!   on the outer, so ρ = 0.9 is 1.9% low and ρ = 0.99 19% low. Two causes were found and removed. (1) A pair
@@ -110,18 +110,19 @@
 //!   the pairs of touching children that refinement makes carry nothing while kept (their bound
 //!   min(1, A_S/A_R) splits them along every shared boundary), and the concave nodes it reaches take the same
 //!   path. The default `self_exchange = "traced"` ([`self_exchange`]) traces every node's F_NN before the
-//!   solve and gives one-sided nodes' self-links and siblings the traced light, kept whole. `radlab run` on the
-//!   terrain, 1,024 points, 4,096-path reference, constant answers, ε = 1e-4 / 1e-5 / 1e-6, relative L1
-//!   `cap` → `traced`: 10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.5%, 10⁵ faces 6.3 / 5.6 / 5.3% → 5.0 /
-//!   3.6 / 2.9%; median point −3.2 … −4.4% → +0.05 … +1.1%; links within 1.5% (57.3k / 57.6k at 10⁵,
-//!   ε = 1e-4), solve times within 10%; the trace 0.4M rays at 10⁵ faces (setup 0.17 → 0.29 s). The bumpy
-//!   sphere answers bit for bit alike in both modes at 10⁴ and 10⁵ faces (3.75%, 3.77%); the 10⁴-face
-//!   concentric spheres (ρ = 0.5) 0.62% → 0.52% in 1.91 → 0.99 s (285k → 133k links), since the outer
-//!   sphere's one-sided caps no longer refine their touching children. Closed concave meshes near ρ = 1 lose
-//!   exactness: a traced F_NN has noise, and the 48-face furnace sphere at ρ = 0.999 (rows exact with `cap`,
-//!   refined to its faces) diverges; `row_normalisation = "closed-scenes"` holds it (tested).
-//! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 1.9% low at the defaults and 0.8% low at
-//!   ε = 1e-5 (`room_of_cubes_furnace`; 2.5% and 1.1% with `self_exchange = "cap"`). Before (2) it was 16% low: links to a whole cube are kept below ε
+//!   solve; one-sided nodes of at least 32 faces carry it in their self-links, and their children the traced
+//!   exchange between them, kept whole; smaller nodes keep the cap's rule and reach the faces' exact kernels
+//!   where ε asks. `radlab run` on the terrain, 1,024 points, 4,096-path reference, constant answers, ε = 1e-4 /
+//!   1e-5 / 1e-6, relative L1 `cap` → `traced`: 10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.4%, 10⁵ faces
+//!   6.3 / 5.6 / 5.3% → 5.0 / 3.6 / 2.9%; median point −3.2 … −4.4% → +0.06 … +1.2%; at 10⁵ faces 57.3k →
+//!   58.0k links and 0.40 → 0.41 s at ε = 1e-4 (1.07 → 1.40 s at 1e-5, 3.9 → 6.1 s at 1e-6), the trace 0.4M
+//!   rays (setup 0.17 → 0.29 s). The bumpy sphere answers bit for bit alike in both modes at 10⁴ and 10⁵ faces
+//!   (3.75%, 3.77%), and so does the room of 4³ cubes; the 10⁴-face concentric spheres (ρ = 0.5) go from 0.62%
+//!   to 0.52% in 1.96 → 1.01 s (285k → 133k links). What the even spread costs: inside a 192-face furnace
+//!   sphere (ρ = 0.5) faces lie 1.968–2.034 against 2 (cap: 2.003–2.006), a facet beside a sibling receiving
+//!   more of it than one across; the 48-face one is exact in both modes.
+//! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 2.5% low at the defaults and 1.1% low at
+//!   ε = 1e-5 (`room_of_cubes_furnace`). Before (2) it was 16% low: links to a whole cube are kept below ε
 //!   although its cone straddles every direction, and the vectors from opposite sides cancelled. Refusing
 //!   such links whatever they carry, the other way out, refined the 10⁵-face bumpy sphere to its faces (61k →
 //!   11.6M links, 0.89 s → 178 s of solve).

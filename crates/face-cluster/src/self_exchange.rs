@@ -34,12 +34,12 @@ pub enum SelfExchangeMode {
     /// pairs while it could carry more than ε. Exact inside a sphere; a ridge or a rough patch of ground has
     /// none, so its parts exchange no light.
     Cap,
-    /// A one-sided curved node (normal cone narrower than 90°) has a self-link carrying its traced F_NN, and
-    /// two one-sided siblings a link carrying the traced exchange between them, never refined; both spread
+    /// A one-sided curved node (normal cone narrower than 90°) of at least
+    /// [`crate::vector_transport::TRACED_MIN_FACES`] (32) faces has a self-link carrying its traced F_NN, and its
+    /// two children, if one-sided, a link carrying the traced exchange between them, never refined; both spread
     /// evenly over the receiver ([`SelfExchange`]; at least [`SELF_RAYS`] rays per input face before the
-    /// solve). A wider node (a closed part, a slab's top and bottom) keeps the cap's rule if it is concave;
-    /// otherwise its self-link carries nothing and is refined while its traced F_NN could carry more than ε.
-    /// The default.
+    /// solve). Other nodes keep the cap's rule if they are concave; otherwise their self-link carries nothing
+    /// and is refined while their traced F_NN could carry more than ε. The default.
     #[default]
     Traced,
 }
