@@ -68,7 +68,13 @@
 //! reference at 1,024 points (noise floor 1.2%) 3.60% relative L1 with constant answers and 2.82% with
 //! Gouraud's (3.87% and 3.36% before).
 //!
-//! Measured again with the traced self-exchange as the default (release, idle machine, 2026-11-30): 10⁶
+//! Measured again with the traced self-exchange as the default (release, idle machine, 2026-11-30; `radlab
+//! run` on `experiments/scaling-clusters.toml`'s scenes with face clusters alone, 1,024 points, 1,024-path
+//! references): solve wall time at K = 10³ … 10⁶, bumpy sphere 0.55, 0.75, 0.96, 1.19 s (fitted slope 0.11),
+//! terrain 0.06, 0.09, 0.41, 0.21 s (0.24), concentric spheres 0.57, 1.02, 1.75, 1.97 s (0.18); peak memory
+//! slopes 0.65, 0.78, 0.63 (2.4 GiB at 10⁶: the hierarchy and the scene, O(k)); links 50k–62k, 15k–58k,
+//! 89k–154k; setup (hierarchy from the cache, the trace) 2.8–5.5 s at 10⁶; relative L1 4.0–4.1%, 4.2–5.2%,
+//! 0.65–1.1% (noise floors 2.4%, 0.8–0.9%, 0). 10⁶
 //! faces end to end with a cold cache, 21.3 s wall, 2.48 GiB peak RSS; the solve 1.13 s (52.8k links);
 //! 5.49M rays, 4.06M of them the trace (which adds 0.7–0.8 s wall, 2.4 s CPU to the setup against `cap`,
 //! warm cache); 3.60% relative L1 constant and 2.82% Gouraud, as before (the bumpy sphere's nodes exchange
@@ -77,7 +83,7 @@
 //! Where the solve does well and badly (measured on concentric spheres, a furnace with B = E/(1 − ρ), through
 //! the operator's row sums: [`radlab_hierarchical::Engine::row_sums`], the irradiance each leaf gathers when
 //! every leaf sends B = 1, one in a closed scene):
-//! - At 600 faces, ρ = 0.5 and the defaults, the furnace's area mean is 0.16% low (0.21% with the traced
+//! - At 600 faces, ρ = 0.5 and the defaults, the furnace's area mean is 0.16% low (0.14% with the traced
 //!   self-exchange; the test
 //!   `concentric_spheres_furnace_mean_within_one_percent`); the rows sum to 0.990 on the inner sphere and 1.000
 //!   on the outer, so ρ = 0.9 is 1.9% low and ρ = 0.99 19% low. Two causes were found and removed. (1) A pair
@@ -110,17 +116,18 @@
 //!   the pairs of touching children that refinement makes carry nothing while kept (their bound
 //!   min(1, A_S/A_R) splits them along every shared boundary), and the concave nodes it reaches take the same
 //!   path. The default `self_exchange = "traced"` ([`self_exchange`]) traces every node's F_NN before the
-//!   solve; one-sided nodes of at least 32 faces carry it in their self-links, and their children the traced
-//!   exchange between them, kept whole; smaller nodes keep the cap's rule and reach the faces' exact kernels
-//!   where ε asks. `radlab run` on the terrain, 1,024 points, 4,096-path reference, constant answers, ε = 1e-4 /
-//!   1e-5 / 1e-6, relative L1 `cap` → `traced`: 10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.4%, 10⁵ faces
-//!   6.3 / 5.6 / 5.3% → 5.0 / 3.6 / 2.9%; median point −3.2 … −4.4% → +0.06 … +1.2%; at 10⁵ faces 57.3k →
-//!   58.0k links and 0.40 → 0.41 s at ε = 1e-4 (1.07 → 1.40 s at 1e-5, 3.9 → 6.1 s at 1e-6), the trace 0.4M
-//!   rays (setup 0.17 → 0.29 s). The bumpy sphere answers bit for bit alike in both modes at 10⁴ and 10⁵ faces
-//!   (3.75%, 3.77%), and so does the room of 4³ cubes; the 10⁴-face concentric spheres (ρ = 0.5) go from 0.62%
-//!   to 0.52% in 1.96 → 1.01 s (285k → 133k links). What the even spread costs: inside a 192-face furnace
-//!   sphere (ρ = 0.5) faces lie 1.968–2.034 against 2 (cap: 2.003–2.006), a facet beside a sibling receiving
-//!   more of it than one across; the 48-face one is exact in both modes.
+//!   solve; one-sided nodes (|Σ A_i n_i| ≥ A/2) of at least 32 faces carry it in their self-links, and their
+//!   children the traced exchange between them, kept whole; smaller nodes, and the children of concave ones
+//!   that follow the cap's rule, reach the faces' exact kernels where ε asks. `radlab run` on the terrain,
+//!   1,024 points, 4,096-path reference, constant answers, ε = 1e-4 / 1e-5 / 1e-6, relative L1 `cap` →
+//!   `traced`: 10⁴ faces 5.3 / 4.6 / 4.3% → 4.4 / 3.1 / 2.4%, 10⁵ faces 6.3 / 5.6 / 5.3% → 5.0 / 3.6 / 2.9%;
+//!   median point −3.2 … −4.4% → +0.06 … +1.2%; at 10⁵ faces 57.3k → 58.0k links and 0.40 → 0.41 s at
+//!   ε = 1e-4 (1.07 → 1.42 s at 1e-5, 3.9 → 5.9 s at 1e-6), the trace 0.4M rays (setup 0.17 → 0.29 s). The
+//!   bumpy sphere answers bit for bit alike in both modes at 10⁴ and 10⁵ faces (3.75%, 3.77%), and so does
+//!   the room of 4³ cubes; the 10⁴-face concentric spheres (ρ = 0.5) 0.62% → 0.65% in 1.96 → 0.97 s (285k →
+//!   123k links). What the even spread costs: inside a 192-face furnace sphere (ρ = 0.5) faces lie
+//!   1.981–2.036 against 2 (cap: 2.003–2.006), a facet beside a sibling receiving more of it than one across;
+//!   the 48-face one is exact in both modes.
 //! - Many closed parts: a room holding 4³ cubes (ρ = 0.5) is 2.5% low at the defaults and 1.1% low at
 //!   ε = 1e-5 (`room_of_cubes_furnace`). Before (2) it was 16% low: links to a whole cube are kept below ε
 //!   although its cone straddles every direction, and the vectors from opposite sides cancelled. Refusing

@@ -34,7 +34,7 @@ pub enum SelfExchangeMode {
     /// pairs while it could carry more than ε. Exact inside a sphere; a ridge or a rough patch of ground has
     /// none, so its parts exchange no light.
     Cap,
-    /// A one-sided curved node (normal cone narrower than 90°) of at least
+    /// A one-sided curved node (|Σ A_i n_i| ≥ A/2, for a spherical cap a cone of at most 90°) of at least
     /// [`crate::vector_transport::TRACED_MIN_FACES`] (32) faces has a self-link carrying its traced F_NN, and its
     /// two children, if one-sided, a link carrying the traced exchange between them, never refined; both spread
     /// evenly over the receiver ([`SelfExchange`]; at least [`SELF_RAYS`] rays per input face before the

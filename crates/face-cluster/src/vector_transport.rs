@@ -38,7 +38,7 @@
 //! half-angle θ sends to itself (A_cap/(4πR²), exact for the inside of a sphere); flat (θ < 1e-6 rad), convex
 //! and single-face nodes have none, and a node whose children are single faces refines its self-link into
 //! the faces' links (flat facets exchange more across their shared edge than the cap's share says). That is
-//! `self_exchange = "cap"`. By default (`traced`) a one-sided curved cluster (cone narrower than 90°) of at
+//! `self_exchange = "cap"`. By default (`traced`) a one-sided curved cluster (|Σ A_i n_i| ≥ A/2) of at
 //! least [`TRACED_MIN_FACES`] faces has a self-link carrying instead its traced self form factor F_NN,
 //! and its two one-sided children a link carrying their traced exchange, both as isotropic irradiance
 //! ([`crate::self_exchange`]); a siblings' link is never refined. A wider or smaller node whose children do
@@ -266,15 +266,25 @@ fn traced_self(node: &FaceNode<'_>) -> Option<f64> {
     };
     let n = c.id as usize;
     let traced = c.ctx.exchange.onto_itself.get(n)?;
-    traced_size(node).then_some(*traced)
+    traced_tree_node(c.node()).then_some(*traced)
 }
 
-/// Whether a node is curved but every face of it faces one open half-space (normal cone half-angle in
-/// [`FLAT_CONE`], 90°)): light spread evenly over it then reaches faces that could all receive it from some
-/// neighbour. A wider node (a closed part, a slab's top and bottom) would hand its top's light to its bottom.
+/// Whether a node is a curved cluster whose faces mostly face one way: |Σ A_i n_i| ≥ Σ A_i / 2 (for a
+/// spherical cap, (1 + cos θ)/2 ≥ 1/2: a cone of at most 90°, and a heightfield's few steep faces do not
+/// change it). Light spread evenly over it then reaches faces that could receive it; a closed part or a slab
+/// (its top and bottom cancel in Σ A_i n_i) would hand its top's light to its bottom.
 fn one_sided(node: &FaceNode<'_>) -> bool {
-    let theta = node.cone().half_angle;
-    (FLAT_CONE..HALF_PI).contains(&theta)
+    matches!(node, FaceNode::Cluster(c) if one_sided_tree_node(c.node()))
+}
+
+/// [`one_sided`] for a tree node.
+fn one_sided_tree_node(n: &crate::Node) -> bool {
+    n.cone.half_angle >= FLAT_CONE && n.vector_area.length() >= 0.5 * n.area
+}
+
+/// Whether a tree node's self-exchange is traced: one-sided, with at least [`TRACED_MIN_FACES`] faces.
+fn traced_tree_node(n: &crate::Node) -> bool {
+    one_sided_tree_node(n) && n.faces().len() >= TRACED_MIN_FACES
 }
 
 /// Faces a cluster needs, at least, for its self-exchange to be traced (default 32: a self-link with its
@@ -284,12 +294,6 @@ fn one_sided(node: &FaceNode<'_>) -> bool {
 /// faces or fewer, had faces 2.1% apart at ρ = 0.5 with even spreads, and is exact refined to its faces. Such
 /// nodes keep the cap's rule and reach the exact kernels between faces where ε asks.
 pub const TRACED_MIN_FACES: usize = 32;
-
-/// Whether a cluster is one-sided ([`one_sided`]) with at least [`TRACED_MIN_FACES`] faces.
-fn traced_size(node: &FaceNode<'_>) -> bool {
-    matches!(node, FaceNode::Cluster(c) if c.node().faces().len() >= TRACED_MIN_FACES)
-        && one_sided(node)
-}
 
 /// The traced flux per unit radiosity that each of two one-sided sibling clusters sends onto the other,
 /// where the exchange was traced and their parent has at least [`TRACED_MIN_FACES`] faces; `None` for
@@ -307,7 +311,10 @@ fn traced_between(recv: &FaceNode<'_>, src: &FaceNode<'_>) -> Option<f64> {
     }
     let traced = r.ctx.exchange.between_children.get(p)?;
     let parent = r.ctx.tree.node(p);
-    (parent.faces().len() >= TRACED_MIN_FACES && one_sided(recv) && one_sided(src))
+    // A concave parent whose own self-link follows the cap's rule hands its children's pairs to the exact
+    // kernels (inside a sphere, an even spread over a hemisphere was 2% off at its faces).
+    let cap_parent = r.ctx.concave(p) && !traced_tree_node(parent);
+    (!cap_parent && parent.faces().len() >= TRACED_MIN_FACES && one_sided(recv) && one_sided(src))
         .then_some(*traced)
 }
 
