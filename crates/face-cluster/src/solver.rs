@@ -181,24 +181,8 @@ impl MethodParams for FaceClusterSolveParams {
                 ));
             }
         };
-        let row_normalisation = match table.remove("row_normalisation") {
-            None => RowNormalisation::Off,
-            Some(v) => v.try_into().map_err(|e: toml::de::Error| {
-                SolveError::param(
-                    "row_normalisation",
-                    format!("{}; use closed-scenes or off", e.message()),
-                )
-            })?,
-        };
-        let self_exchange = match table.remove("self_exchange") {
-            None => SelfExchangeMode::Traced,
-            Some(v) => v.try_into().map_err(|e: toml::de::Error| {
-                SolveError::param(
-                    "self_exchange",
-                    format!("{}; use cap or traced", e.message()),
-                )
-            })?,
-        };
+        let row_normalisation = choice(&mut table, "row_normalisation", "closed-scenes or off")?;
+        let self_exchange = choice(&mut table, "self_exchange", "cap or traced")?;
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
@@ -209,6 +193,21 @@ impl MethodParams for FaceClusterSolveParams {
             row_normalisation,
             self_exchange,
         })
+    }
+}
+
+/// The value of the choice `key` in `table` (removed from it), or its default; a bad value names the key and
+/// the `allowed` values.
+fn choice<T: Default + serde::de::DeserializeOwned>(
+    table: &mut toml::Table,
+    key: &str,
+    allowed: &str,
+) -> Result<T, SolveError> {
+    match table.remove(key) {
+        None => Ok(T::default()),
+        Some(v) => v.try_into().map_err(|e: toml::de::Error| {
+            SolveError::param(key, format!("{}; use {allowed}", e.message()))
+        }),
     }
 }
 

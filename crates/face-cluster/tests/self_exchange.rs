@@ -3,7 +3,7 @@
 //! body and keeps 1 − A_in/A_out for itself (Siegel & Howell, enclosure and reciprocity relations).
 
 use radlab_face_cluster::{FaceClusterParams, FaceClusterTree, SELF_RAYS, SelfExchange};
-use radlab_scene::{Accel, builtin};
+use radlab_scene::{Accel, MethodParams, builtin};
 
 /// The concentric-spheres scene's two roots, inner (facing out) first, with their traced self-shares.
 fn concentric(threads: usize) -> (FaceClusterTree, SelfExchange) {
@@ -52,4 +52,17 @@ fn one_and_two_threads_trace_the_same_bits() {
     let (_, one) = concentric(1);
     let (_, two) = concentric(2);
     assert_eq!(one, two);
+}
+
+#[test]
+fn a_bad_self_exchange_names_the_key() {
+    let bad = radlab_face_cluster::FaceClusterSolveParams::from_pairs(&[(
+        "self_exchange".to_string(),
+        "sometimes".to_string(),
+    )]);
+    let message = bad.expect_err("an unknown value").to_string();
+    assert!(
+        message.contains("self_exchange") && message.contains("traced"),
+        "{message}"
+    );
 }
