@@ -114,10 +114,11 @@ impl MethodParams for FaceClusterSolveParams {
         ));
         d.push((
             "self_exchange",
-            "traced (default: at least 4 rays from every face before the solve estimate every curved node's \
-             self form factor and its children's exchange, carried evenly, so a terrain's light onto itself is kept; \
-             closed concave meshes near rho = 1 need row_normalisation) | cap (only a concave node's self-link, \
-             carrying its spherical cap's share, exact inside a sphere; other curved nodes exchange nothing within)",
+            "traced (default: at least 4 rays from every face before the solve estimate every node's self form \
+             factor and its children's exchange, carried evenly by nodes of 32 faces or more that mostly face one \
+             way, so a terrain's light onto itself is kept; smaller nodes as cap) | cap (only a concave node's \
+             self-link, carrying its spherical cap's share, exact inside a sphere; other curved nodes exchange \
+             nothing within)",
         ));
         d
     }
