@@ -74,11 +74,12 @@
 //! terrain 0.06, 0.09, 0.41, 0.21 s (0.24), concentric spheres 0.57, 1.02, 1.75, 1.97 s (0.18); peak memory
 //! slopes 0.65, 0.78, 0.63 (2.4 GiB at 10⁶: the hierarchy and the scene, O(k)); links 50k–62k, 15k–58k,
 //! 89k–154k; setup (hierarchy from the cache, the trace) 2.8–5.5 s at 10⁶; relative L1 4.0–4.1%, 4.2–5.2%,
-//! 0.65–1.1% (noise floors 2.4%, 0.8–0.9%, 0). 10⁶
-//! faces end to end with a cold cache, 21.3 s wall, 2.48 GiB peak RSS; the solve 1.13 s (52.8k links);
-//! 5.49M rays, 4.06M of them the trace (which adds 0.7–0.8 s wall, 2.4 s CPU to the setup against `cap`,
-//! warm cache); 3.60% relative L1 constant and 2.82% Gouraud, as before (the bumpy sphere's nodes exchange
-//! nothing within).
+//! 0.65–1.1% (noise floors 2.4%, 0.8–0.9%, 0). 10⁶ faces end to end with a cold cache: bumpy sphere 18.9 s
+//! wall, 2.47 GiB peak RSS, the solve 1.17 s (52.8k links), 5.49M rays, 4.06M of them the trace (which adds
+//! 0.7–0.8 s wall, 2.4 s CPU to the setup against `cap`, warm cache), 3.60% relative L1 constant and 2.82%
+//! Gouraud against a 4,096-path reference, as before (the bumpy sphere's nodes exchange nothing within);
+//! terrain 20.2 s, 2.50 GiB, the solve 0.21 s, 5.2% at the default ε and 3.9% at ε = 1e-5 (`cap`: 7.1%,
+//! 6.2%).
 //!
 //! Where the solve does well and badly (measured on concentric spheres, a furnace with B = E/(1 − ρ), through
 //! the operator's row sums: [`radlab_hierarchical::Engine::row_sums`], the irradiance each leaf gathers when
