@@ -48,6 +48,9 @@
 //! - links 0.40 / 1.22 / 4.23 / 13.0 M (slope 1.03) at 16 visibility rays each: the rays are 43–48% of the
 //!   solve at 1e4 and, with the links, set the time slope below 1e4; above it the straddling receivers'
 //!   face-by-face evaluations did (directional 1.37 from 1e4 to 3e4 before, 1.18 after).
+//! - Again on the idle machine (same command, 2026-12-01): directional 4.47 / 11.25 / 43.84 / 165.5 s, fitted
+//!   slope 1.06 over 1e3–3e4 (0.98 to 1e4, 1.20 from 1e4 to 3e4), so its target (≤ 1.05) is not met;
+//!   isotropic 4.30 / 10.75 / 39.94 / 147.1 s, slope 1.03, within its target.
 //!
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`
