@@ -83,11 +83,6 @@ impl SelfExchange {
     ) -> Self {
         let nodes = tree.nodes();
         let k = tree.face_order().len();
-        // Position of each scene face in the tree's face order: node N holds face j iff its range holds it.
-        let mut position = vec![0u32; k];
-        for (p, &f) in tree.face_order().iter().enumerate() {
-            position[f as usize] = p as u32;
-        }
         let total: f64 = tree.roots().map(|n| nodes[n].area).sum();
         let landings: Vec<Vec<(u32, f64)>> = (0..k)
             .into_par_iter()
@@ -111,7 +106,8 @@ impl SelfExchange {
                     if scene.faces[hit.face].normal.dot(d) >= 0.0 {
                         continue; // the back of a one-sided face absorbs
                     }
-                    let to = position[hit.face] as usize;
+                    // Node N holds the face hit iff its range of the face order holds the hit face's leaf's.
+                    let to = nodes[tree.leaf_of_face(hit.face)].faces().start;
                     let mut n = tree.leaf_of_face(f);
                     while !nodes[n].faces().contains(&to) {
                         match nodes[n].parent() {

@@ -269,20 +269,15 @@ fn traced_self(node: &FaceNode<'_>) -> Option<f64> {
     traced_tree_node(c.node()).then_some(*traced)
 }
 
-/// Whether a node is a curved cluster whose faces mostly face one way: |Σ A_i n_i| ≥ Σ A_i / 2 (for a
+/// Whether a tree node is curved and its faces mostly face one way: |Σ A_i n_i| ≥ Σ A_i / 2 (for a
 /// spherical cap, (1 + cos θ)/2 ≥ 1/2: a cone of at most 90°, and a heightfield's few steep faces do not
 /// change it). Light spread evenly over it then reaches faces that could receive it; a closed part or a slab
 /// (its top and bottom cancel in Σ A_i n_i) would hand its top's light to its bottom.
-fn one_sided(node: &FaceNode<'_>) -> bool {
-    matches!(node, FaceNode::Cluster(c) if one_sided_tree_node(c.node()))
-}
-
-/// [`one_sided`] for a tree node.
 fn one_sided_tree_node(n: &crate::Node) -> bool {
     n.cone.half_angle >= FLAT_CONE && n.vector_area.length() >= 0.5 * n.area
 }
 
-/// Whether a tree node's self-exchange is traced: one-sided, with at least [`TRACED_MIN_FACES`] faces.
+/// Whether a tree node's self-exchange is traced: one-sided ([`one_sided_tree_node`]), with at least [`TRACED_MIN_FACES`] faces.
 fn traced_tree_node(n: &crate::Node) -> bool {
     one_sided_tree_node(n) && n.faces().len() >= TRACED_MIN_FACES
 }
@@ -314,8 +309,11 @@ fn traced_between(recv: &FaceNode<'_>, src: &FaceNode<'_>) -> Option<f64> {
     // A concave parent whose own self-link follows the cap's rule hands its children's pairs to the exact
     // kernels (inside a sphere, an even spread over a hemisphere was 2% off at its faces).
     let cap_parent = r.ctx.concave(p) && !traced_tree_node(parent);
-    (!cap_parent && parent.faces().len() >= TRACED_MIN_FACES && one_sided(recv) && one_sided(src))
-        .then_some(*traced)
+    (!cap_parent
+        && parent.faces().len() >= TRACED_MIN_FACES
+        && one_sided_tree_node(r.node())
+        && one_sided_tree_node(s.node()))
+    .then_some(*traced)
 }
 
 /// A link that transfers nothing but tells the oracle how much it might: form-factor bounds `f_rs`, `f_sr`.
