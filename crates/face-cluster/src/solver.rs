@@ -6,13 +6,18 @@
 //! by [`VectorTransport`]. Radiosity at a point of a face comes from the deepest engine node holding the face:
 //! its patch if the refinement reached the face, else B = E + ρ max(0, n·e) with the irradiance vector e
 //! pushed to the deepest face cluster containing it (section 4's final propagation, per queried face).
-//! With `reconstruction = "gouraud"`, from irradiance vectors at the mesh's vertices instead: e_v the
-//! area-weighted mean of the irradiance vectors of the faces around vertex v (each face's from the deepest
-//! node holding it), n_v the area-weighted mean of their normals, B_v = E + ρ max(0, n_v·e_v) interpolated
-//! over each face (bilinear over a quad, linear over a triangle), so the output is continuous across every
-//! shared edge between faces of one material. A face the refinement split into patches keeps the patch
-//! solution's own Gouraud values (its quadtree's corners), finer than its vertices but not matched to its
-//! neighbours'. The vertex fields are linear in k and computed at the first query after a step.
+//! With `reconstruction = "gouraud"` (the default), the irradiance is interpolated instead of the radiosity:
+//! at a corner of face f, every face g around that vertex offers the irradiance it gathered, I_g(n_g) with
+//! I_g(n) = n·e_g + s_g (from the deepest node holding g), carried to f's normal by the trapezoid rule between
+//! the two faces' fields; the corners' means are interpolated over f (bilinear over a quad, linear over a
+//! triangle), and B = E + ρ max(0, I) (the formula is at `gouraud_at`). So a face keeps
+//! its own orientation: interpolating vertex radiosities taken with vertex normals (Gouraud shading proper)
+//! blurs a rough surface's tilts into each other, and was 5.6% from the path-traced reference on the
+//! 10⁴-face terrain at ε = 1e-6, against 2.0% for this and 2.4% for constant answers. Interpolation carries
+//! light across a shadow's edge onto the dark faces sharing its vertices, as every interpolation does. A
+//! face the refinement split into patches keeps the patch solution's own Gouraud values (its quadtree's
+//! corners), finer than its vertices but not matched to its neighbours'. The face fields are linear in k and
+//! computed at the first query after a step.
 
 use std::sync::{Arc, OnceLock};
 
@@ -23,7 +28,7 @@ use radlab_hierarchical::{
 use radlab_scene::gouraud::interpolate_corners;
 use radlab_scene::{
     Accel, FaceId, MethodParams, Reconstruction, Rgb, Scene, Solution, SolveError, Solver, Stats,
-    Step,
+    Step, VertexAdjacency,
 };
 use radlab_volume_cluster::RowNormalisation;
 use radlab_volume_cluster::enclosure::enclosures;
@@ -74,9 +79,10 @@ impl Default for FaceClusterSolveParams {
             engine: HierarchicalParams {
                 error_norm: ErrorNorm::Power,
                 epsilon: DEFAULT_EPSILON,
-                // The leaves' own values: a final gather (the hierarchical default) gathers only from leaves
-                // that are patches and has not been measured on face-cluster solutions.
-                reconstruction: Reconstruction::Constant,
+                // The irradiance interpolated from the vertices and taken by each face's normal: closer to
+                // the path-traced reference than the leaves' own values on the terrain, the bumpy sphere and
+                // concentric spheres at every ε measured (the module docs give the figures).
+                reconstruction: Reconstruction::Gouraud,
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
@@ -92,6 +98,12 @@ impl MethodParams for FaceClusterSolveParams {
             .into_iter()
             .filter(|(k, _)| *k != "lazy_linking")
             .map(|(k, v)| match k {
+                "reconstruction" => (
+                    k,
+                    "point answers: gouraud (default: the gathered irradiance interpolated from the mesh's \
+                     vertices, taken by each face's own normal) | constant (each face's deepest node's \
+                     irradiance); final-gather is not offered for face clusters",
+                ),
                 "visibility" => (
                     k,
                     "rays per link, between the two ends' 4 representative points: unoccluded | centre | \
@@ -125,6 +137,15 @@ impl MethodParams for FaceClusterSolveParams {
 
     fn validate(&self) -> Result<(), SolveError> {
         self.engine.validate()?;
+        if self.engine.reconstruction == Reconstruction::FinalGather {
+            // The engine's final gather sums over patch leaves only: the clusters that carry most of a
+            // face-cluster solution would send nothing.
+            return Err(SolveError::param(
+                "reconstruction",
+                "face clusters have no final gather (it would gather from the few faces refined into patches \
+                 and miss the clusters); use gouraud (the default) or constant",
+            ));
+        }
         // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
         // points of a patch): more rays than point pairs would repeat segments.
         let points = FaceClusterParams::default().samples_per_node.min(4);
@@ -225,9 +246,10 @@ pub struct FaceClusterSolver<'a> {
     engine_node: Vec<u32>,
     /// Whether point answers are interpolated from vertices (`reconstruction = "gouraud"`).
     gouraud: bool,
-    /// Per scene vertex, the unit vertex normal and irradiance vector per channel (Gouraud output), computed
-    /// at the first query after a step.
-    vertex_fields: OnceLock<Vec<VertexField>>,
+    /// Every input face's gathered irradiance (Gouraud output), computed at the first query after a step.
+    face_fields: OnceLock<Vec<ClampedIrradiance>>,
+    /// The faces around every vertex (Gouraud output), built at the first query.
+    vertex_adjacency: OnceLock<VertexAdjacency>,
     scanned: usize,
     rays: u64,
 }
@@ -313,7 +335,8 @@ impl<'a> FaceClusterSolver<'a> {
             output,
             engine_node: vec![NO_NODE; tree_nodes],
             gouraud,
-            vertex_fields: OnceLock::new(),
+            face_fields: OnceLock::new(),
+            vertex_adjacency: OnceLock::new(),
             scanned: 0,
             rays,
         };
@@ -385,7 +408,7 @@ impl<'a> FaceClusterSolver<'a> {
         let s = self.engine.step_counting_rays(self.accel, &mut self.rays)?;
         self.index_new_nodes();
         self.output.update(&self.engine, self.scene.face_count());
-        self.vertex_fields = OnceLock::new();
+        self.face_fields = OnceLock::new();
         Ok(s)
     }
 
@@ -415,58 +438,66 @@ impl<'a> FaceClusterSolver<'a> {
             .map_or(ClampedIrradiance::ZERO, |i| h[i as usize])
     }
 
-    /// Per scene vertex: the area-weighted mean of its faces' unit normals (normalised) and of their gathered
-    /// irradiance. Linear in k: for output only.
-    fn vertex_fields(&self) -> &[VertexField] {
-        self.vertex_fields.get_or_init(|| {
-            let faces: Vec<ClampedIrradiance> = (0..self.scene.face_count())
+    /// Every input face's gathered irradiance, computed at the first query after a step (linear in k: for
+    /// output only).
+    fn face_fields(&self) -> &[ClampedIrradiance] {
+        self.face_fields.get_or_init(|| {
+            (0..self.scene.face_count())
                 .into_par_iter()
                 .map(|f| self.face_irradiance(f))
-                .collect();
-            let mut sums =
-                vec![(DVec3::ZERO, ClampedIrradiance::ZERO, 0.0); self.scene.vertices.len()];
-            for (f, e) in faces.iter().enumerate() {
-                let face = &self.scene.faces[f];
-                for &v in face.vertex_indices() {
-                    let s = &mut sums[v as usize];
-                    s.0 += face.normal * face.area;
-                    s.1.add_scaled(Rgb::splat(face.area), e);
-                    s.2 += face.area;
-                }
-            }
-            sums.into_iter()
-                .map(|(n, e, a)| VertexField {
-                    normal: n.normalize_or_zero(),
-                    irradiance: if a > 0.0 { e.scaled(1.0 / a) } else { e },
-                })
                 .collect()
         })
     }
 
-    /// Gouraud radiosity of `face` at `point`: B_v = E + ρ max(0, n_v·e_v + s_v) at the face's vertices, interpolated
-    /// (bilinear in a quad's parameters, linear in a triangle's).
+    /// Gouraud radiosity of `face` at `point`. With I_g(n) = n·e_g + s_g the irradiance face g's gathered
+    /// field gives a face of normal n, each face g around a corner v offers its own irradiance carried to
+    /// this face's normal n by the trapezoid rule between the two faces' fields,
+    ///
+    ///   I_g→f = I_g(n_g) + (n − n_g)·(e_g + e_f)/2,
+    ///
+    /// and the corner takes their mean weighted by A_g max(0, n·n_g) (a face across a crease counts less, one
+    /// at a right angle or beyond not at all). Where the irradiance is one linear field of the normal (a
+    /// light in front of every face) that is its value at n, to second order in the spread of normals times
+    /// the spread of fields; where it does not depend on the normal at all (the inside of a furnace, whose
+    /// faces' fields point along their own normals) the two fields' slopes cancel, where carrying g's
+    /// field alone to n would lose 1 − cos of the angle between the faces. The corner values are interpolated
+    /// to the point (bilinear in a quad's parameters, linear in a triangle's) and B = E + ρ max(0, I).
     fn gouraud_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        let fields = self.vertex_fields();
-        let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
-        let mut values = [Rgb::ZERO; 4];
-        for (slot, &v) in values
+        let fields = self.face_fields();
+        let around = self
+            .vertex_adjacency
+            .get_or_init(|| VertexAdjacency::new(self.scene));
+        let n = self.scene.faces[face].normal;
+        let own = &fields[face];
+        let mut corners = [Rgb::ZERO; 4];
+        for (corner, &v) in corners
             .iter_mut()
             .zip(self.scene.faces[face].vertex_indices())
         {
-            let VertexField { normal, irradiance } = &fields[v as usize];
-            *slot = em + rho * irradiance.at(*normal);
+            let mut total = 0.0;
+            for g in around.faces_around(v) {
+                let other = &self.scene.faces[g];
+                let w = other.area * n.dot(other.normal).max(0.0);
+                if w > 0.0 {
+                    let (eg, m) = (&fields[g], n - other.normal);
+                    let carried = |c: usize| {
+                        other.normal.dot(eg.vector[c])
+                            + eg.isotropic[c]
+                            + 0.5 * m.dot(eg.vector[c] + own.vector[c])
+                    };
+                    let carried = Rgb::new(carried(0), carried(1), carried(2));
+                    *corner += w * carried;
+                    total += w;
+                }
+            }
+            if total > 0.0 {
+                *corner /= total;
+            }
         }
-        interpolate_corners(&self.scene.polygon(face), &values, point)
+        let irradiance = interpolate_corners(&self.scene.polygon(face), &corners, point);
+        let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
+        em + rho * irradiance.max(Rgb::ZERO)
     }
-}
-
-/// What Gouraud output keeps per scene vertex.
-#[derive(Clone, Copy, Debug)]
-struct VertexField {
-    /// Area-weighted mean of the unit normals of the faces around the vertex, normalised.
-    normal: DVec3,
-    /// Area-weighted mean of those faces' gathered irradiance.
-    irradiance: ClampedIrradiance,
 }
 
 impl Solution for FaceClusterSolver<'_> {

@@ -485,6 +485,80 @@ fn gouraud_is_exact_where_the_irradiance_vector_is_constant() {
     }
 }
 
+/// The floor of [`floor_and_light`] (10 × 10 cells) as a sawtooth along x: vertex column i at z = 0.03 (i mod
+/// 3), so two columns of faces rise at 16.7° and the third falls at 31°, under the same distant light.
+fn corrugated_floor_and_light() -> Scene {
+    let flat = floor_and_light(10, 1.0);
+    let mut b = SceneBuilder::new("corrugated floor");
+    let floor = b
+        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
+        .expect("valid");
+    let light = b
+        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(10.0)).expect("valid"))
+        .expect("valid");
+    for &v in &flat.vertices {
+        let column = (v.x * 10.0).round() as usize;
+        let z = if v.z == 0.0 {
+            0.03 * (column % 3) as f64
+        } else {
+            v.z
+        };
+        b.add_vertex(dvec3(v.x, v.y, z), "floor").expect("finite");
+    }
+    let last = flat.face_count() - 1;
+    for f in 0..last {
+        b.add_polygon(flat.faces[f].vertex_indices(), floor, "floor")
+            .expect("valid");
+    }
+    b.add_polygon(flat.faces[last].vertex_indices(), light, "light")
+        .expect("valid");
+    b.build().expect("scene")
+}
+
+/// Gouraud output interpolates the irradiance, not the radiosity: where the solve leaves the sawtooth floor
+/// one cluster (one irradiance for all its faces; the spherical cap's self-exchange, so that no traced
+/// self-link splits it), every point of every face answers E + ρ max(0, n·e + s) with the face's own normal,
+/// exactly the constant reconstruction's answer, although faces of different tilts answer differently.
+/// Interpolating vertex radiosities computed with vertex normals (means of the tilts around each vertex)
+/// would blur the tilts into each other.
+#[test]
+fn gouraud_keeps_each_face_s_own_orientation() {
+    let scene = corrugated_floor_and_light();
+    let accel = Accel::new(&scene);
+    let solved = |reconstruction: &str| {
+        let p = params(&[
+            ("oracle", "f"),
+            ("epsilon", "0.05"),
+            ("self_exchange", "cap"),
+            ("reconstruction", reconstruction),
+        ]);
+        let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
+        solve(&mut s);
+        s
+    };
+    let (gouraud, constant) = (solved("gouraud"), solved("constant"));
+    assert_eq!(
+        constant.engine().link_count(),
+        2,
+        "light → floor and floor → light"
+    );
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0_f64);
+    for f in 0..scene.face_count() - 1 {
+        let want = constant.radiosity_at(f, scene.faces[f].centroid).x;
+        lo = lo.min(want);
+        hi = hi.max(want);
+        let poly = scene.polygon(f);
+        for (u, v) in [(0.0, 0.0), (0.3, 0.1), (0.1, 0.7), (1.0, 0.0)] {
+            let b = gouraud.radiosity_at(f, poly.point_at(u, v)).x;
+            assert!((b - want).abs() <= 1e-12 * want, "face {f}: {b} vs {want}");
+        }
+    }
+    assert!(
+        hi > lo * 1.01,
+        "the tilts answer alike ({lo} … {hi}): the test would be vacuous"
+    );
+}
+
 /// Gouraud output is continuous across the floor's shared edges: at every vertex, every face around it
 /// answers the same value (B_v of that vertex), while the values vary over the floor (the floor is split into
 /// clusters with their own irradiance vectors, none refined down to patches).
@@ -526,7 +600,10 @@ fn gouraud_agrees_at_shared_vertices() {
 /// A lamp standing on a floor (a partition: one emitting face at x = 0.5 across the unit floor, facing +x,
 /// its bottom edge on the floor): every floor face in front of it is lit (the floor's centroid lies in the
 /// lamp's plane, so the lamp's irradiance vector there is zero and must not stand for the whole floor), and
-/// every face behind it stays exactly dark (the lamp emits from its front only and nothing else is lit).
+/// every face behind it stays exactly dark (the lamp emits from its front only and nothing else is lit). The
+/// faces' own answers (constant reconstruction): Gouraud's interpolation from the vertices carries some of
+/// the lit faces' irradiance onto the dark faces that share their vertices under the lamp, as any
+/// interpolation across a shadow's edge does.
 #[test]
 fn a_lamp_standing_on_a_floor_lights_the_floor_in_front_of_it() {
     let scene = floor_and_quad(
@@ -542,8 +619,13 @@ fn a_lamp_standing_on_a_floor_lights_the_floor_in_front_of_it() {
     let floor_faces = scene.face_count() - 1;
     assert!(scene.faces[floor_faces].normal.x > 0.99);
     let accel = Accel::new(&scene);
-    let mut s =
-        FaceClusterSolver::new(&scene, &accel, params(&[("epsilon", "0.001")]), 7).expect("solver");
+    let mut s = FaceClusterSolver::new(
+        &scene,
+        &accel,
+        params(&[("epsilon", "0.001"), ("reconstruction", "constant")]),
+        7,
+    )
+    .expect("solver");
     solve(&mut s);
     for f in 0..floor_faces {
         let c = scene.faces[f].centroid;

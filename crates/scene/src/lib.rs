@@ -30,6 +30,7 @@ pub mod sampling;
 pub mod scene;
 pub mod solver;
 pub mod test_scenes;
+pub mod vertex_adjacency;
 
 pub use accel::{Accel, AccelPreset, Hit, Ray};
 pub use camera::{Camera, CameraFrame, Image, render_solution};
@@ -44,6 +45,7 @@ pub use polygon::{AreaSampler, FACING_TOL_REL, Polygon, facing_away};
 pub use reconstruction::{Reconstruction, Reconstructor};
 pub use scene::{Face, FaceId, Material, Scene, SceneBuilder, SceneWarnings};
 pub use solver::{PerFaceSolution, Solution, Solver, Stats, Step};
+pub use vertex_adjacency::VertexAdjacency;
 
 /// Linear RGB triple (f64 per channel): radiosity, emission, reflectance.
 pub type Rgb = glam::DVec3;
