@@ -16,17 +16,26 @@
 //! area), and within g/4 at any face for one link. The same line gives what a curved source with faces
 //! turned away sends toward d: Σ B_i A_i max(0, n_i·d) ≈ a Σ B_i A_i + b p·d, p = Σ B_i A_i n_i.
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use radlab_hierarchical::LinearState;
 use radlab_scene::Rgb;
 
-/// A node's gathered irradiance: the vector part and the isotropic part, per channel.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// A node's gathered irradiance: the vector part and the isotropic part, per channel, and the vector part's
+/// Jacobian over the node ([`crate::irradiance_gradient`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClampedIrradiance {
-    /// Irradiance vector e per channel.
+    /// Irradiance vector e per channel, at the node's centroid.
     pub vector: [DVec3; 3],
     /// Isotropic irradiance s per channel: a face of any orientation receives s besides n·e.
     pub isotropic: Rgb,
+    /// ∂e/∂y per channel: at a point y of the node, e(y) = e + J (y − c), c its centroid.
+    pub gradient: [DMat3; 3],
+}
+
+impl Default for ClampedIrradiance {
+    fn default() -> Self {
+        Self::ZERO
+    }
 }
 
 impl ClampedIrradiance {
@@ -34,16 +43,26 @@ impl ClampedIrradiance {
     pub const ZERO: Self = Self {
         vector: [DVec3::ZERO; 3],
         isotropic: Rgb::ZERO,
+        gradient: [DMat3::ZERO; 3],
     };
 
-    /// Both parts times `c`.
+    /// All parts times `c`.
     pub fn scaled(&self, c: f64) -> Self {
         let mut out = Self::ZERO;
         out.add_scaled(Rgb::splat(c), self);
         out
     }
 
-    /// The irradiance I(n) = max(0, n·e + s) of a face with unit normal `n`, per channel.
+    /// The same field seen from a point `offset` away from the centroid: e + J offset there, J unchanged.
+    pub fn moved(&self, offset: DVec3) -> Self {
+        let mut out = *self;
+        for k in 0..3 {
+            out.vector[k] += self.gradient[k] * offset;
+        }
+        out
+    }
+
+    /// The irradiance I(n) = max(0, n·e + s) at the centroid of a face with unit normal `n`, per channel.
     pub fn at(&self, n: DVec3) -> Rgb {
         Rgb::new(
             (n.dot(self.vector[0]) + self.isotropic[0]).max(0.0),
@@ -57,6 +76,9 @@ impl LinearState for ClampedIrradiance {
     fn add_scaled(&mut self, c: Rgb, x: &Self) {
         self.vector.add_scaled(c, &x.vector);
         self.isotropic += c * x.isotropic;
+        for k in 0..3 {
+            self.gradient[k] += x.gradient[k] * c[k];
+        }
     }
 }
 
@@ -104,6 +126,7 @@ impl CosineFit {
         LinkCoefficient {
             vector: u * (self.slope * g),
             isotropic: self.offset * g,
+            gradient: DMat3::ZERO,
         }
     }
 
@@ -115,13 +138,21 @@ impl CosineFit {
     }
 }
 
-/// A link's coefficient at its gather target, per unit flux: what it adds to e and to s.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// A link's coefficient at its gather target, per unit flux: what it adds to e, to s and to e's Jacobian.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LinkCoefficient {
     /// Added to e per unit flux.
     pub vector: DVec3,
     /// Added to s per unit flux.
     pub isotropic: f64,
+    /// Added to ∂e/∂y per unit flux (zero for a link that brings one irradiance to the whole target).
+    pub gradient: DMat3,
+}
+
+impl Default for LinkCoefficient {
+    fn default() -> Self {
+        Self::vector(DVec3::ZERO)
+    }
 }
 
 impl LinkCoefficient {
@@ -130,6 +161,7 @@ impl LinkCoefficient {
         Self {
             vector: v,
             isotropic: 0.0,
+            gradient: DMat3::ZERO,
         }
     }
 
@@ -138,6 +170,15 @@ impl LinkCoefficient {
         Self {
             vector: DVec3::ZERO,
             isotropic: s,
+            gradient: DMat3::ZERO,
+        }
+    }
+
+    /// The same with the vector part's Jacobian `j` over the target.
+    pub fn with_gradient(self, j: DMat3) -> Self {
+        Self {
+            gradient: j,
+            ..self
         }
     }
 }
@@ -209,6 +250,7 @@ mod tests {
                 &ClampedIrradiance {
                     vector: [c.vector; 3],
                     isotropic: Rgb::splat(c.isotropic),
+                    gradient: [c.gradient; 3],
                 },
             );
         }

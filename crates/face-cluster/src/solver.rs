@@ -37,6 +37,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::face_node::{FaceContext, FaceNode};
+use crate::irradiance_gradient::IrradianceField;
 use crate::self_exchange::{SELF_RAYS, SelfExchange, SelfExchangeMode};
 use crate::vector_transport::VectorTransport;
 use crate::{FaceClusterParams, FaceClusterTree};
@@ -71,6 +72,10 @@ pub struct FaceClusterSolveParams {
     /// What curved nodes send onto themselves ([`SelfExchangeMode`]). Default [`SelfExchangeMode::Traced`].
     #[serde(default)]
     pub self_exchange: SelfExchangeMode,
+    /// How a link's irradiance spreads over a cluster receiver ([`IrradianceField`]). Default
+    /// [`IrradianceField::Linear`].
+    #[serde(default)]
+    pub irradiance_field: IrradianceField,
 }
 
 impl Default for FaceClusterSolveParams {
@@ -88,6 +93,7 @@ impl Default for FaceClusterSolveParams {
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
             row_normalisation: RowNormalisation::Off,
             self_exchange: SelfExchangeMode::Traced,
+            irradiance_field: IrradianceField::Linear,
         }
     }
 }
@@ -123,6 +129,13 @@ impl MethodParams for FaceClusterSolveParams {
              face find whether the scene is closed, a pass linear in the faces; if it is, each leaf's row is \
              rescaled to sum to one, as an enclosure's form factors do, and a closed furnace holds by \
              construction)",
+        ));
+        d.push((
+            "irradiance_field",
+            "linear (default: a link brings its irradiance and the irradiance's Jacobian over a cluster \
+             receiver, by central differences of its kernel, six more evaluations a link, so a cluster's faces \
+             take the field at their own centroids) | constant (the value at the receiver's centroid for all \
+             its faces)",
         ));
         d.push((
             "self_exchange",
@@ -181,6 +194,7 @@ impl MethodParams for FaceClusterSolveParams {
                 ("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}")),
                 ("row_normalisation".to_string(), "\"off\"".to_string()),
                 ("self_exchange".to_string(), "\"traced\"".to_string()),
+                ("irradiance_field".to_string(), "\"linear\"".to_string()),
             ])
             .collect()
     }
@@ -205,6 +219,7 @@ impl MethodParams for FaceClusterSolveParams {
         };
         let row_normalisation = choice(&mut table, "row_normalisation", "closed-scenes or off")?;
         let self_exchange = choice(&mut table, "self_exchange", "cap or traced")?;
+        let irradiance_field = choice(&mut table, "irradiance_field", "linear or constant")?;
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
@@ -214,6 +229,7 @@ impl MethodParams for FaceClusterSolveParams {
             cache_dir,
             row_normalisation,
             self_exchange,
+            irradiance_field,
         })
     }
 }
@@ -315,7 +331,8 @@ impl<'a> FaceClusterSolver<'a> {
             } else {
                 0.0
             },
-        );
+        )
+        .with_field(params.irradiance_field);
         let output = SurfaceOutput::new(p.reconstruction, seed);
         let gouraud = p.reconstruction == Reconstruction::Gouraud;
         let root = ctx.root_volume();
@@ -396,12 +413,14 @@ impl<'a> FaceClusterSolver<'a> {
     }
 
     fn stats(&self) -> Stats {
-        self.engine.stats(
+        let mut s = self.engine.stats(
             self.rays,
             self.output.bytes()
                 + self.ctx.bytes() as u64
                 + (self.engine_node.capacity() * 4) as u64,
-        )
+        );
+        s.form_factors += self.engine.kernel().jacobian_evaluations();
+        s
     }
 
     fn step(&mut self) -> Result<Step, SolveError> {
@@ -435,7 +454,14 @@ impl<'a> FaceClusterSolver<'a> {
             };
         }
         self.deepest_cluster(face)
-            .map_or(ClampedIrradiance::ZERO, |i| h[i as usize])
+            .map_or(ClampedIrradiance::ZERO, |i| self.at_face(i, face))
+    }
+
+    /// The irradiance of engine node `i` (a cluster) moved to the centroid of input face `face` below it.
+    fn at_face(&self, i: u32, face: FaceId) -> ClampedIrradiance {
+        let node = &self.engine.nodes()[i as usize];
+        self.engine.irradiance()[i as usize]
+            .moved(self.scene.faces[face].centroid - node.centroid())
     }
 
     /// Every input face's gathered irradiance, computed at the first query after a step (linear in k: for
@@ -521,7 +547,7 @@ impl Solution for FaceClusterSolver<'_> {
         let Some(i) = self.deepest_cluster(face) else {
             return Rgb::ZERO;
         };
-        let e = &self.engine.irradiance()[i as usize];
+        let e = self.at_face(i, face);
         let n = self.scene.faces[face].normal;
         let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
         em + rho * e.at(n)

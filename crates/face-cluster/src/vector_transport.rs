@@ -62,9 +62,14 @@ use radlab_scene::{
     form_factor::{VisibilitySampling, point_polygon_vector},
 };
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use crate::bounds::angle_between;
 use crate::clamped_irradiance::{ClampedIrradiance, CosineFit, LinkCoefficient};
 use crate::face_node::FaceNode;
+use crate::irradiance_gradient::{
+    IrradianceField, JACOBIAN_EVALUATIONS, central_jacobian, point_field,
+};
 
 /// A single-face source is near when its bounding radius exceeds this fraction of the distance between the
 /// two ends' centres: there the point form's relative error, of order (R/r)², would pass 1%, and the link
@@ -85,6 +90,10 @@ pub struct VectorTransport<'a> {
     refuse_above: f64,
     /// A_R's divisor in the refusal estimate: the scene's area (power norm), or 0 for the radiosity norm.
     norm_area: f64,
+    /// Whether links bring a linear irradiance field over cluster receivers.
+    field: IrradianceField,
+    /// Kernel evaluations the irradiance Jacobians took (the engine counts one per coefficient).
+    jacobian_evaluations: AtomicU64,
 }
 
 impl<'a> VectorTransport<'a> {
@@ -104,7 +113,35 @@ impl<'a> VectorTransport<'a> {
             visibility,
             refuse_above: epsilon,
             norm_area: scene_area,
+            field: IrradianceField::Constant,
+            jacobian_evaluations: AtomicU64::new(0),
         }
+    }
+
+    /// The same transport, its links bringing `field` over cluster receivers.
+    pub fn with_field(self, field: IrradianceField) -> Self {
+        Self { field, ..self }
+    }
+
+    /// Kernel evaluations the irradiance Jacobians have taken so far (besides the engine's one per
+    /// coefficient).
+    pub fn jacobian_evaluations(&self) -> u64 {
+        self.jacobian_evaluations.load(Ordering::Relaxed)
+    }
+
+    /// The Jacobian of `f` over `target` (central differences across half its bounding radius), counted;
+    /// `None` for a constant field, a volume or patch target, or where `f` is undefined.
+    fn jacobian(
+        &self,
+        target: &FaceNode<'_>,
+        f: impl Fn(DVec3) -> Option<DVec3>,
+    ) -> Option<glam::DMat3> {
+        if self.field == IrradianceField::Constant || !matches!(target, FaceNode::Cluster(_)) {
+            return None;
+        }
+        self.jacobian_evaluations
+            .fetch_add(JACOBIAN_EVALUATIONS, Ordering::Relaxed);
+        central_jacobian(f, target.centroid(), 0.5 * target.bound().radius)
     }
 
     fn visibility(&self, a: &FaceNode<'_>, b: &FaceNode<'_>) -> f64 {
@@ -588,9 +625,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
                         t.normal * (self.patches.kernel_mean(t, &s) * link.coefficient),
                     );
                 }
-                return LinkCoefficient::vector(
+                let plane = |y: DVec3| (y - s.polygon.vertices()[0]).dot(s.polygon.vector_area());
+                let c = LinkCoefficient::vector(
                     point_polygon_vector(target.centroid(), &s.polygon) * link.coefficient,
                 );
+                let j = self.jacobian(target, |y| {
+                    (plane(y) > 0.0).then(|| point_polygon_vector(y, &s.polygon))
+                });
+                return j.map_or(c, |j| c.with_gradient(j * link.coefficient));
             }
         }
         if target.key() == src.key() {
@@ -604,10 +646,24 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         if traced_between(target, src).is_some() {
             return LinkCoefficient::isotropic(link.coefficient);
         }
-        let (d, _) = centroid_geometry(target.centroid(), src.centroid());
-        let fit =
-            bound_direction(target, src).map_or(CosineFit::FACING, |d_c| cosine_fit(target, -d_c));
-        fit.coefficient(-d, link.coefficient)
+        let (d, r2) = centroid_geometry(target.centroid(), src.centroid());
+        let d_c = bound_direction(target, src);
+        let fit = d_c.map_or(CosineFit::FACING, |d_c| cosine_fit(target, -d_c));
+        let c = fit.coefficient(-d, link.coefficient);
+        // The point field's Jacobian, unless the transfer is capped (g = V/max(A_R, A_S) no longer falls as
+        // 1/r²); uncapped, g = V/(π r²), so V = g π r².
+        let pi_r2 = std::f64::consts::PI * r2;
+        if pi_r2 < target.area().max(src.area()) || fit.slope == 0.0 {
+            return c;
+        }
+        let v = link.coefficient * pi_r2;
+        // The source's cosine turns with the direction where every face of it faces the receiver.
+        let axis = (!src.is_volume()
+            && d_c.is_none_or(|d_c| cosine_fit(src, d_c) == CosineFit::FACING))
+        .then(|| src.cone().axis);
+        let s = src.centroid();
+        let j = self.jacobian(target, |y| point_field(y, s, axis, d));
+        j.map_or(c, |j| c.with_gradient(j * (fit.slope * v)))
     }
 
     fn emit(
@@ -638,8 +694,19 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
     fn deliver(&self, h: &mut ClampedIrradiance, c: &LinkCoefficient, flux: Rgb) {
         for k in 0..3 {
             h.vector[k] += c.vector * flux[k];
+            h.gradient[k] += c.gradient * flux[k];
         }
         h.isotropic += flux * c.isotropic;
+    }
+
+    fn push(
+        &self,
+        parent: &FaceNode<'a>,
+        child: &FaceNode<'a>,
+        h: &ClampedIrradiance,
+    ) -> ClampedIrradiance {
+        // The parent's field at the child's centroid (unchanged where the parent gathered no Jacobian).
+        h.moved(child.centroid() - parent.centroid())
     }
 
     fn reflect(

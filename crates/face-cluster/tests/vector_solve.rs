@@ -193,6 +193,68 @@ fn near_source_gives_the_exact_polygon_irradiance() {
     }
 }
 
+/// A near light off to the side of the floor (0.4 × 0.4 at height 1, over x ∈ [1.4, 1.8]): its irradiance
+/// falls across the floor. With ε large enough that the floor stays one cluster, the linear field
+/// (`irradiance_field = "linear"`) gives each face the secant linearisation of the closed form about the
+/// cluster's centroid c, B_f = max(0, ρ E [F(c) + Σ_k (F(c + h e_k) − F(c − h e_k))/(2h) (c_f − c)_k]) with F
+/// the point-to-polygon form factor and h half the cluster's bounding radius (1e-9; computed here from the
+/// scalar closed form, in the solver from the irradiance vector's Jacobian, pushed to the face). It is
+/// closer to F at the faces' centroids than one value for the whole floor (`constant`): the sum of the
+/// faces' absolute errors was 1.55 against 5.00 (a Jacobian of the wrong sign or scale would raise it).
+#[test]
+fn a_linear_field_follows_a_light_to_the_side() {
+    use radlab_hierarchical::NodeKind;
+    use radlab_scene::form_factor::point_polygon;
+    let scene = floor_and_quad(
+        10,
+        &[
+            dvec3(1.4, 0.3, 1.0),
+            dvec3(1.4, 0.7, 1.0),
+            dvec3(1.8, 0.7, 1.0),
+            dvec3(1.8, 0.3, 1.0),
+        ],
+        10.0,
+    );
+    let accel = Accel::new(&scene);
+    let light = scene.polygon(scene.face_count() - 1);
+    let exact = |p: glam::DVec3| 0.5 * 10.0 * point_polygon(p, glam::DVec3::Z, &light);
+    let total_error = |field: &str| {
+        let p = params(&[
+            ("epsilon", "0.5"),
+            ("visibility", "centre"),
+            ("reconstruction", "constant"),
+            ("irradiance_field", field),
+        ]);
+        let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
+        solve(&mut s);
+        let floor = s
+            .engine()
+            .nodes()
+            .iter()
+            .find(|n| matches!(n, FaceNode::Cluster(_)) && (n.area() - 1.0).abs() < 1e-9)
+            .expect("the floor is one cluster");
+        let (c, h) = (floor.centroid(), 0.5 * floor.bound().radius);
+        let slope = |axis: glam::DVec3| (exact(c + axis * h) - exact(c - axis * h)) / (2.0 * h);
+        let (sx, sy) = (slope(glam::DVec3::X), slope(glam::DVec3::Y));
+        let mut total = 0.0;
+        for f in 0..scene.face_count() - 1 {
+            let cf = scene.faces[f].centroid;
+            let b = s.radiosity_at(f, cf).x;
+            if field == "linear" {
+                let want = (exact(c) + sx * (cf.x - c.x) + sy * (cf.y - c.y)).max(0.0);
+                assert!(
+                    (b - want).abs() <= 1e-9 * exact(c),
+                    "face {f}: {b} vs {want}"
+                );
+            }
+            total += (b - exact(cf)).abs();
+        }
+        total
+    };
+    let (linear, constant) = (total_error("linear"), total_error("constant"));
+    assert!(linear < constant, "{linear} vs {constant}");
+}
+
 /// Lengths × 1e-4 and × 1e4 give the same links and radiosity (all quantities are relative).
 #[test]
 fn scale_does_not_change_the_answer() {
@@ -516,8 +578,8 @@ fn corrugated_floor_and_light() -> Scene {
 }
 
 /// Gouraud output interpolates the irradiance, not the radiosity: where the solve leaves the sawtooth floor
-/// one cluster (one irradiance for all its faces; the spherical cap's self-exchange, so that no traced
-/// self-link splits it), every point of every face answers E + ρ max(0, n·e + s) with the face's own normal,
+/// one cluster with one irradiance for all its faces (the spherical cap's self-exchange, so that no traced
+/// self-link splits it, and no Jacobian), every point of every face answers E + ρ max(0, n·e + s) with the face's own normal,
 /// exactly the constant reconstruction's answer, although faces of different tilts answer differently.
 /// Interpolating vertex radiosities computed with vertex normals (means of the tilts around each vertex)
 /// would blur the tilts into each other.
@@ -530,6 +592,7 @@ fn gouraud_keeps_each_face_s_own_orientation() {
             ("oracle", "f"),
             ("epsilon", "0.05"),
             ("self_exchange", "cap"),
+            ("irradiance_field", "constant"),
             ("reconstruction", reconstruction),
         ]);
         let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
