@@ -28,6 +28,9 @@ pub struct ClampedIrradiance {
     pub vector: [DVec3; 3],
     /// Isotropic irradiance s per channel: a face of any orientation receives s besides n·e.
     pub isotropic: Rgb,
+    /// Traced self-exchange t per channel: isotropic like s, but spread over the node's parts by how much of
+    /// their view their own mesh fills ([`crate::self_exchange`]) as it is pushed down.
+    pub traced: Rgb,
     /// ∂e/∂y per channel: at a point y of the node, e(y) = e + J (y − c), c its centroid.
     pub gradient: [DMat3; 3],
 }
@@ -43,6 +46,7 @@ impl ClampedIrradiance {
     pub const ZERO: Self = Self {
         vector: [DVec3::ZERO; 3],
         isotropic: Rgb::ZERO,
+        traced: Rgb::ZERO,
         gradient: [DMat3::ZERO; 3],
     };
 
@@ -62,13 +66,23 @@ impl ClampedIrradiance {
         out
     }
 
-    /// The irradiance I(n) = max(0, n·e + s) at the centroid of a face with unit normal `n`, per channel.
+    /// The unclamped irradiance n·e + s + t of channel `k` at the centroid of a face with unit normal `n`.
+    pub fn linear(&self, n: DVec3, k: usize) -> f64 {
+        n.dot(self.vector[k]) + self.isotropic[k] + self.traced[k]
+    }
+
+    /// The irradiance I(n) = max(0, n·e + s + t) at the centroid of a face with unit normal `n`, per channel.
     pub fn at(&self, n: DVec3) -> Rgb {
         Rgb::new(
-            (n.dot(self.vector[0]) + self.isotropic[0]).max(0.0),
-            (n.dot(self.vector[1]) + self.isotropic[1]).max(0.0),
-            (n.dot(self.vector[2]) + self.isotropic[2]).max(0.0),
+            self.linear(n, 0).max(0.0),
+            self.linear(n, 1).max(0.0),
+            self.linear(n, 2).max(0.0),
         )
+    }
+
+    /// The isotropic parts s + t.
+    pub fn isotropic_total(&self) -> Rgb {
+        self.isotropic + self.traced
     }
 }
 
@@ -76,6 +90,7 @@ impl LinearState for ClampedIrradiance {
     fn add_scaled(&mut self, c: Rgb, x: &Self) {
         self.vector.add_scaled(c, &x.vector);
         self.isotropic += c * x.isotropic;
+        self.traced += c * x.traced;
         for k in 0..3 {
             self.gradient[k] += x.gradient[k] * c[k];
         }
@@ -126,6 +141,7 @@ impl CosineFit {
         LinkCoefficient {
             vector: u * (self.slope * g),
             isotropic: self.offset * g,
+            traced: 0.0,
             gradient: DMat3::ZERO,
         }
     }
@@ -145,6 +161,8 @@ pub struct LinkCoefficient {
     pub vector: DVec3,
     /// Added to s per unit flux.
     pub isotropic: f64,
+    /// Added to t per unit flux.
+    pub traced: f64,
     /// Added to ∂e/∂y per unit flux (zero for a link that brings one irradiance to the whole target).
     pub gradient: DMat3,
 }
@@ -161,6 +179,7 @@ impl LinkCoefficient {
         Self {
             vector: v,
             isotropic: 0.0,
+            traced: 0.0,
             gradient: DMat3::ZERO,
         }
     }
@@ -170,7 +189,16 @@ impl LinkCoefficient {
         Self {
             vector: DVec3::ZERO,
             isotropic: s,
+            traced: 0.0,
             gradient: DMat3::ZERO,
+        }
+    }
+
+    /// A traced self-exchange every face of the target takes whole, spread by its parts' view of their mesh.
+    pub fn traced(t: f64) -> Self {
+        Self {
+            traced: t,
+            ..Self::vector(DVec3::ZERO)
         }
     }
 
@@ -250,6 +278,7 @@ mod tests {
                 &ClampedIrradiance {
                     vector: [c.vector; 3],
                     isotropic: Rgb::splat(c.isotropic),
+                    traced: Rgb::splat(c.traced),
                     gradient: [c.gradient; 3],
                 },
             );

@@ -69,6 +69,9 @@ pub struct SelfExchange {
     /// Per node: H(N)/2, the flux per unit radiosity each of its two children sends onto the other
     /// (0 for a leaf).
     pub between_children: Vec<f64>,
+    /// Per node: the flux per unit radiosity its mesh's faces send onto it, Σ_{j ∈ N} A_j F_{j→mesh} (the
+    /// rays of the trace that land on its faces; by reciprocity also what its faces send onto their mesh).
+    pub landed: Vec<f64>,
 }
 
 impl SelfExchange {
@@ -84,7 +87,7 @@ impl SelfExchange {
         let nodes = tree.nodes();
         let k = tree.face_order().len();
         let total: f64 = tree.roots().map(|n| nodes[n].area).sum();
-        let landings: Vec<Vec<(u32, f64)>> = (0..k)
+        let landings: Vec<Vec<(u32, u32, f64)>> = (0..k)
             .into_par_iter()
             .map(|f| {
                 let face = &scene.faces[f];
@@ -116,15 +119,16 @@ impl SelfExchange {
                         }
                     }
                     if nodes[n].faces().contains(&to) {
-                        out.push((n as u32, w));
+                        out.push((n as u32, tree.leaf_of_face(hit.face) as u32, w));
                     }
                 }
                 out
             })
             .collect();
-        let mut h = vec![0.0; nodes.len()];
-        for (n, w) in landings.iter().flatten() {
+        let (mut h, mut landed) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
+        for (n, leaf, w) in landings.iter().flatten() {
             h[*n as usize] += w;
+            landed[*leaf as usize] += w;
         }
         let between_children = h.iter().map(|x| 0.5 * x).collect();
         // Children follow parents (breadth-first): a reverse walk sums each subtree before its parent reads it.
@@ -133,9 +137,35 @@ impl SelfExchange {
             let below: f64 = nodes[i].children().map(|c| onto_itself[c]).sum();
             onto_itself[i] += below;
         }
+        for i in (0..nodes.len()).rev() {
+            let below: f64 = nodes[i].children().map(|c| landed[c]).sum();
+            landed[i] += below;
+        }
         Self {
             onto_itself,
             between_children,
+            landed,
         }
+    }
+
+    /// The share of a traced exchange delivered evenly to `parent` that its child `child` takes per unit
+    /// area, relative to the parent's: (L_C/A_C)/(L_P/A_P) with L the flux landed ([`Self::landed`]). Light
+    /// a rough surface sends onto itself lands where more of the view is the surface itself, in its valleys
+    /// rather than on its ridges; the area-weighted mean of the children's ratios is one, so pushing by it
+    /// keeps the node's total. One where nothing was traced.
+    pub fn landing_ratio(
+        &self,
+        parent: usize,
+        child: usize,
+        parent_area: f64,
+        child_area: f64,
+    ) -> f64 {
+        let (Some(&lp), Some(&lc)) = (self.landed.get(parent), self.landed.get(child)) else {
+            return 1.0;
+        };
+        if !(lp > 0.0 && child_area > 0.0) {
+            return 1.0;
+        }
+        (lc / child_area) / (lp / parent_area)
     }
 }

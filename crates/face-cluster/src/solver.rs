@@ -507,9 +507,7 @@ impl<'a> FaceClusterSolver<'a> {
                 if w > 0.0 {
                     let (eg, m) = (&fields[g], n - other.normal);
                     let carried = |c: usize| {
-                        other.normal.dot(eg.vector[c])
-                            + eg.isotropic[c]
-                            + 0.5 * m.dot(eg.vector[c] + own.vector[c])
+                        eg.linear(other.normal, c) + 0.5 * m.dot(eg.vector[c] + own.vector[c])
                     };
                     let carried = Rgb::new(carried(0), carried(1), carried(2));
                     *corner += w * carried;

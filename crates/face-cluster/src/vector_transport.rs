@@ -637,14 +637,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
         if target.key() == src.key() {
             if traced_self(target).is_some() {
-                // A traced self-link: its share of the node's own mean radiosity, on every face alike.
-                return LinkCoefficient::isotropic(link.coefficient);
+                // A traced self-link: its share of the node's own mean radiosity, on every face.
+                return LinkCoefficient::traced(link.coefficient);
             }
             // A self-link: the cap's share f of its own mean radiosity, along its axis.
             return LinkCoefficient::vector(target.cone().axis * link.coefficient);
         }
         if traced_between(target, src).is_some() {
-            return LinkCoefficient::isotropic(link.coefficient);
+            return LinkCoefficient::traced(link.coefficient);
         }
         let (d, r2) = centroid_geometry(target.centroid(), src.centroid());
         let d_c = bound_direction(target, src);
@@ -697,6 +697,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             h.gradient[k] += c.gradient * flux[k];
         }
         h.isotropic += flux * c.isotropic;
+        h.traced += flux * c.traced;
     }
 
     fn push(
@@ -705,8 +706,18 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         child: &FaceNode<'a>,
         h: &ClampedIrradiance,
     ) -> ClampedIrradiance {
-        // The parent's field at the child's centroid (unchanged where the parent gathered no Jacobian).
-        h.moved(child.centroid() - parent.centroid())
+        // The parent's field at the child's centroid (unchanged where the parent gathered no Jacobian), and
+        // its traced self-exchange in proportion to how much of their view the parts' mesh fills.
+        let mut down = h.moved(child.centroid() - parent.centroid());
+        if let (FaceNode::Cluster(p), FaceNode::Cluster(c)) = (parent, child) {
+            down.traced *= p.ctx.exchange.landing_ratio(
+                p.id as usize,
+                c.id as usize,
+                p.node().area,
+                c.node().area,
+            );
+        }
+        down
     }
 
     fn reflect(
@@ -725,7 +736,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
                     Rgb::ZERO
                 };
                 let rho = leaf.reflectance();
-                let (v, s) = (&h.vector, h.isotropic);
+                let (v, s) = (&h.vector, h.isotropic_total());
                 let b = Rgb::new(
                     e[0] + rho[0] * (0.25 * v[0].length() + s[0]),
                     e[1] + rho[1] * (0.25 * v[1].length() + s[1]),
@@ -744,7 +755,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
                 let node = c.node();
                 let i = c.id as usize;
                 let rv = &c.ctx.rho_vector[i];
-                let (v, s) = (&h.vector, h.isotropic);
+                let (v, s) = (&h.vector, h.isotropic_total());
                 let reflected: [DVec3; 3] =
                     std::array::from_fn(|k| node.m[k].mul_vec(v[k]) + rv[k] * s[k]);
                 let p = if with_emission {

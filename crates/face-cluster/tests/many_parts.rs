@@ -152,7 +152,8 @@ fn many_parts_start_from_one_link() {
         let got = s.radiosity_at(f, c).x;
         worst = worst.max((got - want).abs() / want);
     }
-    // Measured: 5,437 links (1/12 of roots²), worst 2.4%.
+    // Measured: 5,437 links (1/12 of roots²), worst 2.4% with one irradiance per cluster; worst 1.6% with
+    // the linear field.
     assert!(links * 10 < roots * roots, "{links} links");
     // A face answers with its tile's irradiance vector, taken at the tile's centre, 0.118 from the
     // triangle's centroid; F ∝ h²/(h² + x²)² changes by |d ln F/dx| = 4x/(h² + x²) ≤ 0.198 per unit over the
@@ -260,8 +261,10 @@ fn rough_slab_in_a_room(n: usize, rho: f64) -> (Scene, std::ops::Range<usize>) {
 /// The rough slab in a furnace: B = E/(1 − ρ) = 2 on every face, the rough top included, whose faces see
 /// one another (its valleys) although the slab as a whole is convex: its two children do not face each other,
 /// so with `self_exchange = "cap"` no link carries that light and the top is 15% low at any ε (measured 1.700,
-/// 1.698, 1.696 at ε = 1e-4, 1e-5, 1e-6). The traced self-exchange carries it: 1.916, 1.974, 1.979 (the room's
-/// walls 2.020, 2.003, 1.999). Held, as the room of cubes, within 2% at ε = 1e-5.
+/// 1.698, 1.696 at ε = 1e-4, 1e-5, 1e-6). The traced self-exchange carries it: 1.916, 1.974, 1.979 with each
+/// face's own value and the exchange spread evenly (the room's walls 2.020, 2.003, 1.999), and 1.992 at
+/// ε = 1e-5 with the defaults since (Gouraud answers, the linear field, the exchange pushed down by where it
+/// lands). Held within 1% at ε = 1e-5.
 #[test]
 fn a_rough_top_in_a_furnace_sends_light_onto_itself() {
     let rho = 0.5;
@@ -276,5 +279,5 @@ fn a_rough_top_in_a_furnace_sends_light_onto_itself() {
     let on_top: Vec<_> = fr.iter().filter(|x| top.contains(&x.0)).collect();
     let area: f64 = on_top.iter().map(|x| x.1).sum();
     let mean = on_top.iter().map(|x| x.2.x * x.1).sum::<f64>() / area;
-    assert!((mean - 2.0).abs() <= 0.02 * 2.0, "{mean}");
+    assert!((mean - 2.0).abs() <= 0.01 * 2.0, "{mean}");
 }

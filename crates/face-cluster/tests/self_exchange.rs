@@ -47,6 +47,39 @@ fn an_enclosure_keeps_what_the_body_inside_does_not_take() {
     );
 }
 
+/// What lands on a node's faces from its own mesh: at a root that is everything the mesh sends onto itself
+/// (the same rays as its self form factor, summed another way), at a convex root nothing, and below a root
+/// the children's landings add up to their parent's, so pushing a traced exchange down by the landing ratio
+/// keeps its total: Σ_C A_C ratio_C = A_P at every node that received any.
+#[test]
+fn landings_add_up_and_pushing_by_them_keeps_the_total() {
+    let (tree, x) = concentric(2);
+    for r in tree.roots() {
+        let (l, f) = (x.landed[r], x.onto_itself[r]);
+        assert!(
+            (l - f).abs() <= 1e-9 * f.max(1e-300),
+            "root {r}: {l} vs {f}"
+        );
+    }
+    let mut checked = 0;
+    for (p, node) in tree.nodes().iter().enumerate() {
+        if node.is_leaf() || x.landed[p] <= 0.0 {
+            continue;
+        }
+        let kept: f64 = node
+            .children()
+            .map(|c| tree.node(c).area * x.landing_ratio(p, c, node.area, tree.node(c).area))
+            .sum();
+        assert!(
+            (kept - node.area).abs() <= 1e-9 * node.area,
+            "node {p}: {kept} vs {}",
+            node.area
+        );
+        checked += 1;
+    }
+    assert!(checked > 100, "only {checked} nodes received any light");
+}
+
 #[test]
 fn one_and_two_threads_trace_the_same_bits() {
     let (_, one) = concentric(1);
