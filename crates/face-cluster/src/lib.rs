@@ -45,6 +45,29 @@
 //! ([`FaceClusterSolver::face_reads`] counts the faces read); radiosity at a point comes from the deepest node
 //! holding its face.
 //!
+//! Besides those, `irradiance_field` (`linear` by default: each link also brings its kernel's Jacobian over a
+//! cluster receiver, [`irradiance_gradient`], so a cluster's faces take the irradiance at their own
+//! centroids; `constant` for one value per cluster) and `self_exchange` ([`self_exchange`]). Point answers
+//! are Gouraud's by default, interpolating the faces' irradiance rather than their radiosity so each face keeps
+//! its own orientation ([`FaceClusterSolver`]).
+//!
+//! Measured with Gouraud answers, the linear field and the traced exchange pushed down by where it lands (the
+//! defaults; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,
+//! 2026-12-01): direct light on a flat 10⁴-face floor at ε = 1e-4 / 1e-5 / 1e-6, 1.9 / 0.7 / 0.6% (one
+//! irradiance per cluster: 11.0 / 4.0 / 1.8%; noise floor 0.53%); terrain 10⁴ faces 1.84 / 1.84 / 1.98%
+//! (before this session's three changes, constant answers: 4.4 / 3.1 / 2.4%), 10⁵ faces 2.73 / 2.46 / 2.39%
+//! (5.0 / 3.6 / 2.9%); bumpy sphere 10⁴ faces 2.57 / 1.71 / 1.30% (3.5 / 2.4 / 1.7%; noise floor 1.21%).
+//! The terrain's remaining error is in the light it sends onto itself: its direct light alone (ρ = 0.01)
+//! is within 0.7% at 10⁵ faces (ε = 1e-8), and at ρ = 0.5 the error is spread over every part of the ground,
+//! the light's footprint 0.2% too dark and the far ground 0.4% too bright (net, relative to the whole).
+//! 10⁶ faces end to end with a cold cache (`/usr/bin/time -v radlab solve "builtin:bumpy-sphere?faces=1000000"
+//! --method face-cluster --set cache_dir=EMPTY`): bumpy sphere 22.1 s wall, 2.47 GiB peak RSS, solve 1.23 s,
+//! 2.65% relative L1 (1.77% at ε = 1e-5); terrain 23.1 s, 2.50 GiB, solve 0.28 s, 3.00% (2.71% at ε = 1e-5).
+//! Solve time against k = 10³ … 10⁶ (`experiments/scaling-clusters.toml`'s scenes, face clusters alone): bumpy
+//! sphere 0.56, 0.77, 0.99, 1.58 s (slope 0.15), terrain 0.06, 0.10, 0.52, 0.41 s (0.32, above the 0.3
+//! target; with `radlab solve` alone, no evaluation between steps, 0.065, 0.105, 0.49, 0.28 s, slope 0.26),
+//! concentric spheres 0.61, 0.98, 1.84, 2.12 s (0.19); memory slopes 0.56, 0.75, 0.55.
+//!
 //! Measured before the volume hierarchy above the roots and the near-source vectors existed (release, 2 threads
 //! on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
 //! solve wall time and links against k at the defaults: concentric spheres 1e3 → 1e4 → 1e5 faces:

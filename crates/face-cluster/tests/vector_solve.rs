@@ -9,16 +9,22 @@ use radlab_scene::{
     builtin,
 };
 
-/// A unit floor (z = 0, facing up, ρ = 0.5) as `cells` × `cells` squares of two triangles each (or one quad
-/// when `cells` is 0), and a 0.2 × 0.2 light (E = 10, ρ = 0) at height 5 facing down; lengths × `scale`.
-fn floor_and_light(cells: usize, scale: f64) -> Scene {
-    let mut b = SceneBuilder::new("floor");
+/// The floor's material (ρ = 0.5) and a light's (E = `e`, ρ = 0), added to `b`.
+fn floor_and_light_materials(b: &mut SceneBuilder, e: f64) -> (u32, u32) {
     let floor = b
         .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
         .expect("valid");
     let light = b
-        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(10.0)).expect("valid"))
+        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(e)).expect("valid"))
         .expect("valid");
+    (floor, light)
+}
+
+/// A unit floor (z = 0, facing up, ρ = 0.5) as `cells` × `cells` squares of two triangles each (or one quad
+/// when `cells` is 0), and a 0.2 × 0.2 light (E = 10, ρ = 0) at height 5 facing down; lengths × `scale`.
+fn floor_and_light(cells: usize, scale: f64) -> Scene {
+    let mut b = SceneBuilder::new("floor");
+    let (floor, light) = floor_and_light_materials(&mut b, 10.0);
     if cells == 0 {
         b.add_polygon_points(
             &[
@@ -86,12 +92,7 @@ fn floor_under_a_near_light(cells: usize) -> Scene {
 fn floor_and_quad(cells: usize, corners: &[glam::DVec3; 4], e: f64) -> Scene {
     let far = floor_and_light(cells, 1.0);
     let mut b = SceneBuilder::new("floor and quad");
-    let floor = b
-        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
-        .expect("valid");
-    let light = b
-        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(e)).expect("valid"))
-        .expect("valid");
+    let (floor, light) = floor_and_light_materials(&mut b, e);
     for &v in &far.vertices {
         b.add_vertex(v, "floor").expect("finite");
     }
@@ -552,12 +553,7 @@ fn gouraud_is_exact_where_the_irradiance_vector_is_constant() {
 fn corrugated_floor_and_light() -> Scene {
     let flat = floor_and_light(10, 1.0);
     let mut b = SceneBuilder::new("corrugated floor");
-    let floor = b
-        .add_material(Material::new("floor", Rgb::splat(0.5), Rgb::ZERO).expect("valid"))
-        .expect("valid");
-    let light = b
-        .add_material(Material::new("light", Rgb::ZERO, Rgb::splat(10.0)).expect("valid"))
-        .expect("valid");
+    let (floor, light) = floor_and_light_materials(&mut b, 10.0);
     for &v in &flat.vertices {
         let column = (v.x * 10.0).round() as usize;
         let z = if v.z == 0.0 {
