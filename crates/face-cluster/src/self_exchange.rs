@@ -36,9 +36,9 @@ pub enum SelfExchangeMode {
     Cap,
     /// A one-sided curved node (|Σ A_i n_i| ≥ A/2, for a spherical cap a cone of at most 90°) of at least
     /// [`crate::vector_transport::TRACED_MIN_FACES`] (32) faces has a self-link carrying its traced F_NN, and its
-    /// two children, if one-sided, a link carrying the traced exchange between them, never refined; both spread
-    /// evenly over the receiver ([`SelfExchange`]; at least [`SELF_RAYS`] rays per input face before the
-    /// solve). Other nodes keep the cap's rule if they are concave; otherwise their self-link carries nothing
+    /// two children, if one-sided, a link carrying the traced exchange between them, never refined; both
+    /// handed down the receiver by where the trace's rays landed ([`SelfExchange::landing_ratio`]; by default
+    /// at least [`SELF_RAYS`] rays per input face before the solve). Other nodes keep the cap's rule if they are concave; otherwise their self-link carries nothing
     /// and is refined while their traced F_NN could carry more than ε. The default.
     #[default]
     Traced,
@@ -54,8 +54,11 @@ impl SelfExchangeMode {
     }
 }
 
-/// Rays per input face, at least (default 4): at 1e6 faces, 4e6 rays.
-pub const SELF_RAYS: u32 = 4;
+/// Rays per input face, at least, by default (parameter `self_rays`): at 1e6 faces, 3.2e7 rays.
+pub const SELF_RAYS: u32 = 32;
+
+/// Faces traced per block (their landings are held until the block is summed).
+const TRACE_BLOCK: usize = 1 << 16;
 
 /// Rays in all, at least (default 65,536), shared among the faces in proportion to their areas, so that a
 /// coarse mesh (a room of a dozen triangles) is not estimated from a few dozen rays.
@@ -87,48 +90,54 @@ impl SelfExchange {
         let nodes = tree.nodes();
         let k = tree.face_order().len();
         let total: f64 = tree.roots().map(|n| nodes[n].area).sum();
-        let landings: Vec<Vec<(u32, u32, f64)>> = (0..k)
-            .into_par_iter()
-            .map(|f| {
-                let face = &scene.faces[f];
-                if !(face.area > 0.0) || rays == 0 {
-                    return Vec::new();
+        // One face's landings: (deepest node holding both faces, leaf of the face hit, weight).
+        let land = |f: usize| -> Vec<(u32, u32, f64)> {
+            let face = &scene.faces[f];
+            if !(face.area > 0.0) || rays == 0 {
+                return Vec::new();
+            }
+            let rays = rays.max((SELF_RAYS_TOTAL * face.area / total).ceil() as u32);
+            let polygon = scene.polygon(f);
+            let mut r = sampling::rng(seed, f as u64 ^ 0x7365_6c66_6578_6368);
+            let w = face.area / rays as f64;
+            let mut out = Vec::new();
+            for _ in 0..rays {
+                let (u, v) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
+                let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
+                let d = sampling::cosine_hemisphere(face.normal, u1, u2);
+                let Some(hit) = accel.intersect_from(f, polygon.point_at(u, v), d) else {
+                    continue;
+                };
+                if scene.faces[hit.face].normal.dot(d) >= 0.0 {
+                    continue; // the back of a one-sided face absorbs
                 }
-                let rays = rays.max((SELF_RAYS_TOTAL * face.area / total).ceil() as u32);
-                let polygon = scene.polygon(f);
-                let mut r = sampling::rng(seed, f as u64 ^ 0x7365_6c66_6578_6368);
-                let w = face.area / rays as f64;
-                let mut out = Vec::new();
-                for _ in 0..rays {
-                    let (u, v) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
-                    let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
-                    let d = sampling::cosine_hemisphere(face.normal, u1, u2);
-                    let Some(hit) = accel.intersect_from(f, polygon.point_at(u, v), d) else {
-                        continue;
-                    };
-                    if scene.faces[hit.face].normal.dot(d) >= 0.0 {
-                        continue; // the back of a one-sided face absorbs
-                    }
-                    // Node N holds the face hit iff its range of the face order holds the hit face's leaf's.
-                    let to = nodes[tree.leaf_of_face(hit.face)].faces().start;
-                    let mut n = tree.leaf_of_face(f);
-                    while !nodes[n].faces().contains(&to) {
-                        match nodes[n].parent() {
-                            Some(p) => n = p,
-                            None => break,
-                        }
-                    }
-                    if nodes[n].faces().contains(&to) {
-                        out.push((n as u32, tree.leaf_of_face(hit.face) as u32, w));
+                // Node N holds the face hit iff its range of the face order holds the hit face's leaf's.
+                let to = nodes[tree.leaf_of_face(hit.face)].faces().start;
+                let mut n = tree.leaf_of_face(f);
+                while !nodes[n].faces().contains(&to) {
+                    match nodes[n].parent() {
+                        Some(p) => n = p,
+                        None => break,
                     }
                 }
-                out
-            })
-            .collect();
+                if nodes[n].faces().contains(&to) {
+                    out.push((n as u32, tree.leaf_of_face(hit.face) as u32, w));
+                }
+            }
+            out
+        };
+        // Blocks of faces traced in parallel and summed in face order: the same sums on any number of
+        // threads, and at most one block's landings held at once.
         let (mut h, mut landed) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
-        for (n, leaf, w) in landings.iter().flatten() {
-            h[*n as usize] += w;
-            landed[*leaf as usize] += w;
+        for start in (0..k).step_by(TRACE_BLOCK) {
+            let block: Vec<Vec<(u32, u32, f64)>> = (start..(start + TRACE_BLOCK).min(k))
+                .into_par_iter()
+                .map(land)
+                .collect();
+            for (n, leaf, w) in block.iter().flatten() {
+                h[*n as usize] += w;
+                landed[*leaf as usize] += w;
+            }
         }
         let between_children = h.iter().map(|x| 0.5 * x).collect();
         // Children follow parents (breadth-first): a reverse walk sums each subtree before its parent reads it.

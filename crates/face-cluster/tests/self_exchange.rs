@@ -99,3 +99,17 @@ fn a_bad_self_exchange_names_the_key() {
         "{message}"
     );
 }
+
+/// `self_rays` outside 1..=1024, or not a whole number, is refused with the key and the range named.
+#[test]
+fn a_bad_ray_count_names_the_key() {
+    for v in ["0", "2000", "2.5", "\"many\""] {
+        let table: toml::Table = toml::from_str(&format!("self_rays = {v}")).expect("toml");
+        let bad = radlab_face_cluster::FaceClusterSolveParams::from_table(table);
+        let message = bad.expect_err("a bad ray count").to_string();
+        assert!(
+            message.contains("self_rays") && message.contains("1..=1024"),
+            "{v}: {message}"
+        );
+    }
+}
