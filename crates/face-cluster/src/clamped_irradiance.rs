@@ -1,7 +1,11 @@
-//! What a face-cluster node gathers: an irradiance vector e per channel (Willmott, Heckbert & Garland 1999)
-//! and an isotropic irradiance s per channel, so that a face of unit normal n below the node receives
+//! What a face-cluster node gathers: an irradiance vector e per channel (Willmott, Heckbert & Garland 1999),
+//! an isotropic irradiance s per channel, and the traced self-exchange t (isotropic too, but handed down by
+//! where it lands, [`crate::self_exchange`]), so that a face of unit normal n below the node receives
 //!
-//!   I(n) = max(0, n·e + s).
+//!   I(n) = max(0, n·e + s + t),
+//!
+//! with e taken at the face's centroid when the node also holds e's Jacobian
+//! ([`crate::irradiance_gradient`]).
 //!
 //! A link brings irradiance g travelling along unit u, and a face of normal n takes g max(0, n·u). Where every
 //! face of the receiver faces the link (n·u ≥ 0 over the node's normal cone) that is g n·u: the link adds

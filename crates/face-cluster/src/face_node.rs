@@ -181,6 +181,7 @@ impl<'a> FaceContext<'a> {
                 * (size_of::<DVec3>() + size_of::<[DVec3; 3]>() + 2 * size_of::<Rgb>())
             + self.volumes.bytes() as usize
             + self.volume_samples.len() * (24 + VOLUME_SAMPLES * size_of::<DVec3>())
+            + self.exchange.bytes()
     }
 
     /// Position of scene face `f` in the tree's face order.

@@ -157,6 +157,12 @@ impl SelfExchange {
         }
     }
 
+    /// Approximate heap bytes held.
+    pub fn bytes(&self) -> usize {
+        (self.onto_itself.len() + self.between_children.len() + self.landed.len())
+            * size_of::<f64>()
+    }
+
     /// The share of a traced exchange delivered evenly to `parent` that its child `child` takes per unit
     /// area, relative to the parent's: (L_C/A_C)/(L_P/A_P) with L the flux landed ([`Self::landed`]). Light
     /// a rough surface sends onto itself lands where more of the view is the surface itself, in its valleys

@@ -8,7 +8,7 @@
 //! pushed to the deepest face cluster containing it (section 4's final propagation, per queried face).
 //! With `reconstruction = "gouraud"` (the default), the irradiance is interpolated instead of the radiosity:
 //! at a corner of face f, every face g around that vertex offers the irradiance it gathered, I_g(n_g) with
-//! I_g(n) = n·e_g + s_g (from the deepest node holding g), carried to f's normal by the trapezoid rule between
+//! I_g(n) = n·e_g + s_g + t_g (from the deepest node holding g, e at g's centroid), carried to f's normal by the trapezoid rule between
 //! the two faces' fields; the corners' means are interpolated over f (bilinear over a quad, linear over a
 //! triangle), and B = E + ρ max(0, I) (the formula is at `gouraud_at`). So a face keeps
 //! its own orientation: interpolating vertex radiosities taken with vertex normals (Gouraud shading proper)
@@ -438,11 +438,19 @@ impl<'a> FaceClusterSolver<'a> {
     }
 
     fn stats(&self) -> Stats {
+        // Gouraud output's fields count while they are held (the face fields until the next step).
+        let fields = self.face_fields.get().map_or(0, |f| {
+            f.capacity() * std::mem::size_of::<ClampedIrradiance>()
+        }) + self
+            .vertex_adjacency
+            .get()
+            .map_or(0, VertexAdjacency::bytes);
         let mut s = self.engine.stats(
             self.rays,
             self.output.bytes()
                 + self.ctx.bytes() as u64
-                + (self.engine_node.capacity() * 4) as u64,
+                + (self.engine_node.capacity() * 4) as u64
+                + fields as u64,
         );
         s.form_factors += self.engine.kernel().jacobian_evaluations();
         s
@@ -500,7 +508,7 @@ impl<'a> FaceClusterSolver<'a> {
         })
     }
 
-    /// Gouraud radiosity of `face` at `point`. With I_g(n) = n·e_g + s_g the irradiance face g's gathered
+    /// Gouraud radiosity of `face` at `point`. With I_g(n) = n·e_g + s_g + t_g the irradiance face g's gathered
     /// field gives a face of normal n, each face g around a corner v offers its own irradiance carried to
     /// this face's normal n by the trapezoid rule between the two faces' fields,
     ///

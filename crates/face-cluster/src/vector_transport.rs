@@ -6,8 +6,10 @@
 //!   e_R += V max(0, p_S·d) / (π r²) · (−d)                      (Willmott et al. 1999, eq. 4)
 //!
 //! (the point approximation of the kernel: a face i of R with n_i·(−d) ≥ 0 receives n_i·e, the irradiance of
-//! the classic point-to-point transfer). Push: children add their parent's vector. At an engine leaf that is a
-//! cluster, p = p_E + M e + s Σ ρ_i A_i n_i with M = Σ ρ_i A_i n_i n_iᵀ and p_E = Σ E_i A_i n_i, and the
+//! the classic point-to-point transfer). With `irradiance_field = "linear"` (the default) a link to a cluster
+//! also adds its kernel's Jacobian J = ∂e/∂y over the receiver ([`crate::irradiance_gradient`]). Push:
+//! children add their parent's field at their own centroid, e + J (c_child − c_parent), and J. At an engine
+//! leaf that is a cluster, p = p_E + M e + s Σ ρ_i A_i n_i with M = Σ ρ_i A_i n_i n_iᵀ and p_E = Σ E_i A_i n_i, and the
 //! area-mean radiosity B̄ = (Σ E_i A_i + (Σ ρ_i A_i n_i)·e + s Σ ρ_i A_i)/A; at a patch of one face,
 //! B = E + ρ max(0, n·e + s) and p = B A n (s, the isotropic irradiance, is zero but for the straddled links
 //! below).
@@ -40,8 +42,9 @@
 //! the faces' links (flat facets exchange more across their shared edge than the cap's share says). That is
 //! `self_exchange = "cap"`. By default (`traced`) a one-sided curved cluster (|Σ A_i n_i| ≥ A/2) of at
 //! least [`TRACED_MIN_FACES`] faces has a self-link carrying instead its traced self form factor F_NN,
-//! and its two one-sided children a link carrying their traced exchange, both as isotropic irradiance
-//! ([`crate::self_exchange`]); a siblings' link is never refined. A wider or smaller node whose children do
+//! and its two one-sided children a link carrying their traced exchange, both as an isotropic irradiance t
+//! of their own ([`crate::self_exchange`]) that push hands each child in proportion to the trace's landings
+//! on it per unit area, (L_C/A_C)/(L_P/A_P); a siblings' link is never refined. A wider or smaller node whose children do
 //! not face each other has a self-link that carries nothing and is split while its traced F_NN could carry
 //! more than ε, so that one-sided parts, or the faces' exact kernels, carry it (spread evenly over a slab,
 //! its top's light would reach its bottom; over a few facets, a facet beside the sibling would get no more
