@@ -35,6 +35,9 @@ pub struct ClampedIrradiance {
     /// Traced self-exchange t per channel: isotropic like s, but spread over the node's parts by how much of
     /// their view their own mesh fills ([`crate::self_exchange`]) as it is pushed down.
     pub traced: Rgb,
+    /// The part of t that this node's sibling sent it (its traced exchange link), not yet handed down: push
+    /// spreads it by where the sibling's own rays landed, then adds it to t.
+    pub from_sibling: Rgb,
     /// ∂e/∂y per channel: at a point y of the node, e(y) = e + J (y − c), c its centroid.
     pub gradient: [DMat3; 3],
 }
@@ -51,6 +54,7 @@ impl ClampedIrradiance {
         vector: [DVec3::ZERO; 3],
         isotropic: Rgb::ZERO,
         traced: Rgb::ZERO,
+        from_sibling: Rgb::ZERO,
         gradient: [DMat3::ZERO; 3],
     };
 
@@ -72,7 +76,7 @@ impl ClampedIrradiance {
 
     /// The unclamped irradiance n·e + s + t of channel `k` at the centroid of a face with unit normal `n`.
     pub fn linear(&self, n: DVec3, k: usize) -> f64 {
-        n.dot(self.vector[k]) + self.isotropic[k] + self.traced[k]
+        n.dot(self.vector[k]) + self.isotropic[k] + self.traced[k] + self.from_sibling[k]
     }
 
     /// The irradiance I(n) = max(0, n·e + s + t) at the centroid of a face with unit normal `n`, per channel.
@@ -86,7 +90,7 @@ impl ClampedIrradiance {
 
     /// The isotropic parts s + t.
     pub fn isotropic_total(&self) -> Rgb {
-        self.isotropic + self.traced
+        self.isotropic + self.traced + self.from_sibling
     }
 }
 
@@ -95,6 +99,7 @@ impl LinearState for ClampedIrradiance {
         self.vector.add_scaled(c, &x.vector);
         self.isotropic += c * x.isotropic;
         self.traced += c * x.traced;
+        self.from_sibling += c * x.from_sibling;
         for k in 0..3 {
             self.gradient[k] += x.gradient[k] * c[k];
         }
@@ -146,6 +151,7 @@ impl CosineFit {
             vector: u * (self.slope * g),
             isotropic: self.offset * g,
             traced: 0.0,
+            from_sibling: 0.0,
             gradient: DMat3::ZERO,
         }
     }
@@ -167,6 +173,8 @@ pub struct LinkCoefficient {
     pub isotropic: f64,
     /// Added to t per unit flux.
     pub traced: f64,
+    /// Added to the sibling's part of t per unit flux.
+    pub from_sibling: f64,
     /// Added to ∂e/∂y per unit flux (zero for a link that brings one irradiance to the whole target).
     pub gradient: DMat3,
 }
@@ -184,6 +192,7 @@ impl LinkCoefficient {
             vector: v,
             isotropic: 0.0,
             traced: 0.0,
+            from_sibling: 0.0,
             gradient: DMat3::ZERO,
         }
     }
@@ -194,6 +203,7 @@ impl LinkCoefficient {
             vector: DVec3::ZERO,
             isotropic: s,
             traced: 0.0,
+            from_sibling: 0.0,
             gradient: DMat3::ZERO,
         }
     }
@@ -202,6 +212,14 @@ impl LinkCoefficient {
     pub fn traced(t: f64) -> Self {
         Self {
             traced: t,
+            ..Self::vector(DVec3::ZERO)
+        }
+    }
+
+    /// The traced exchange from the target's sibling, spread by where that sibling's rays landed.
+    pub fn from_sibling(t: f64) -> Self {
+        Self {
+            from_sibling: t,
             ..Self::vector(DVec3::ZERO)
         }
     }
@@ -283,6 +301,7 @@ mod tests {
                     vector: [c.vector; 3],
                     isotropic: Rgb::splat(c.isotropic),
                     traced: Rgb::splat(c.traced),
+                    from_sibling: Rgb::splat(c.from_sibling),
                     gradient: [c.gradient; 3],
                 },
             );

@@ -52,19 +52,19 @@
 //! its own orientation ([`FaceClusterSolver`]).
 //!
 //! Measured with Gouraud answers, the linear field and the traced exchange pushed down by where it lands (the
-//! defaults; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,
+//! defaults, 32 trace rays a face; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,
 //! 2026-12-01): direct light on a flat 10⁴-face floor at ε = 1e-4 / 1e-5 / 1e-6, 1.9 / 0.7 / 0.6% (one
-//! irradiance per cluster: 11.0 / 4.0 / 1.8%; noise floor 0.53%); terrain 10⁴ faces 1.78 / 1.63 / 1.54%
-//! (before these changes, constant answers: 4.4 / 3.1 / 2.4%; with 4 trace rays a face instead of 32, 1.84
-//! / 1.84 / 1.98%), 10⁵ faces 2.66 / 2.31 / 2.06% (5.0 / 3.6 / 2.9%; 4 rays: 2.73 / 2.46 / 2.39%); bumpy
-//! sphere 10⁴ faces 2.57 / 1.71 / 1.30% (3.5 / 2.4 / 1.7%; noise floor 1.21%).
+//! irradiance per cluster: 11.0 / 4.0 / 1.8%; noise floor 0.53%); terrain 10⁴ faces 1.76 / 1.61 / 1.51%
+//! (before these changes, constant answers: 4.4 / 3.1 / 2.4%; with 4 trace rays a face and one landing ratio
+//! for all traced light, 1.84 / 1.84 / 1.98%), 10⁵ faces 2.60 / 2.21 / 1.95% (5.0 / 3.6 / 2.9%; 2.73 / 2.46 /
+//! 2.39%); bumpy sphere 10⁴ faces 2.57 / 1.71 / 1.30% (3.5 / 2.4 / 1.7%; noise floor 1.21%).
 //! The terrain's remaining error is in the light it sends onto itself: its direct light alone (ρ = 0.01)
 //! is within 0.7% at 10⁵ faces (ε = 1e-8), and at ρ = 0.5 the error is spread over every part of the ground,
 //! the light's footprint 0.2% too dark and the far ground 0.4% too bright (net, relative to the whole).
 //! 10⁶ faces end to end with a cold cache (`/usr/bin/time -v radlab solve "builtin:bumpy-sphere?faces=1000000"
-//! --method face-cluster --set cache_dir=EMPTY`): bumpy sphere 31.5 s wall, 2.47 GiB peak RSS, solve 1.27 s,
-//! 2.65% relative L1 (1.77% at ε = 1e-5); terrain 30.0 s, 2.50 GiB, solve 0.28 s, 3.00% (2.68% at ε = 1e-5);
-//! the trace's 32 rays a face are 32M of the rays and about 9 s of the wall time (22.1 and 23.1 s with 4).
+//! --method face-cluster --set cache_dir=EMPTY`): bumpy sphere 29.3 s wall, 2.47 GiB peak RSS, solve 1.32 s,
+//! 2.65% relative L1 (1.77% at ε = 1e-5); terrain 31.6 s, 2.50 GiB, solve 0.29 s, 3.00% (2.63% at ε = 1e-5);
+//! the trace's 32 rays a face are 32M of the rays and 7–9 s of the wall time (22.1 and 23.1 s with 4).
 //! Solve time against k = 10³ … 10⁶ (`experiments/scaling-clusters.toml`'s scenes, face clusters alone, 4
 //! trace rays a face, which do not change the solve's work on these scenes' links by more than 1%): bumpy
 //! sphere 0.56, 0.77, 0.99, 1.58 s (slope 0.15), terrain 0.06, 0.10, 0.52, 0.41 s (0.32, above the 0.3

@@ -11,6 +11,11 @@
 //!
 //!   A_N F_NN = Σ_{P ∈ subtree(N)} H(P),     A_a F_ab = A_b F_ba = H(P)/2.
 //!
+//! The same rays say where that light lands: L_N, what the node's mesh sends onto N's faces, and for a
+//! node a with sibling b what b sends onto a and onto each of a's children (the rays whose deepest common
+//! node is a's parent). Push hands a node's traced light down by these (per unit area, the totals kept), so
+//! a valley gets more than a ridge and a sibling's light lands near the sibling.
+//!
 //! A convex node sends nothing onto itself (no ray returns), a spherical cap of half-angle θ seen from
 //! inside sends (1 − cos θ)/2 of its light (inside a sphere of radius R, F_ij = A_j/(4πR²) for any two
 //! parts), and a rough, nearly flat patch of ground something in between; the self-links of [`crate::VectorTransport`] carry these factors where the node's children do
@@ -75,6 +80,12 @@ pub struct SelfExchange {
     /// Per node: the flux per unit radiosity its mesh's faces send onto it, Σ_{j ∈ N} A_j F_{j→mesh} (the
     /// rays of the trace that land on its faces; by reciprocity also what its faces send onto their mesh).
     pub landed: Vec<f64>,
+    /// Per node a: the flux its sibling's faces send onto it (the rays whose deepest common node is a's
+    /// parent), Σ_{j ∈ a} A_j F_{j→sibling}.
+    pub from_sibling: Vec<f64>,
+    /// Per node C: the flux its parent's sibling's faces send onto it (rays whose deepest common node is C's
+    /// grandparent).
+    pub from_uncle: Vec<f64>,
 }
 
 impl SelfExchange {
@@ -91,7 +102,7 @@ impl SelfExchange {
         let k = tree.face_order().len();
         let total: f64 = tree.roots().map(|n| nodes[n].area).sum();
         // One face's landings: (deepest node holding both faces, leaf of the face hit, weight).
-        let land = |f: usize| -> Vec<(u32, u32, f64)> {
+        let land = |f: usize| -> Vec<(u32, u32, u32, f64)> {
             let face = &scene.faces[f];
             if !(face.area > 0.0) || rays == 0 {
                 return Vec::new();
@@ -121,7 +132,7 @@ impl SelfExchange {
                     }
                 }
                 if nodes[n].faces().contains(&to) {
-                    out.push((n as u32, tree.leaf_of_face(hit.face) as u32, w));
+                    out.push((n as u32, to as u32, tree.leaf_of_face(hit.face) as u32, w));
                 }
             }
             out
@@ -129,14 +140,27 @@ impl SelfExchange {
         // Blocks of faces traced in parallel and summed in face order: the same sums on any number of
         // threads, and at most one block's landings held at once.
         let (mut h, mut landed) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
+        let (mut from_sibling, mut from_uncle) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
         for start in (0..k).step_by(TRACE_BLOCK) {
-            let block: Vec<Vec<(u32, u32, f64)>> = (start..(start + TRACE_BLOCK).min(k))
+            let block: Vec<Vec<(u32, u32, u32, f64)>> = (start..(start + TRACE_BLOCK).min(k))
                 .into_par_iter()
                 .map(land)
                 .collect();
-            for (n, leaf, w) in block.iter().flatten() {
-                h[*n as usize] += w;
-                landed[*leaf as usize] += w;
+            for &(n, to, leaf, w) in block.iter().flatten() {
+                h[n as usize] += w;
+                landed[leaf as usize] += w;
+                // The child of n the ray landed in, and that child's child on the way to the face hit.
+                let below = |m: usize| {
+                    nodes[m]
+                        .children()
+                        .find(|&c| nodes[c].faces().contains(&(to as usize)))
+                };
+                if let Some(a) = below(n as usize) {
+                    from_sibling[a] += w;
+                    if let Some(c) = below(a) {
+                        from_uncle[c] += w;
+                    }
+                }
             }
         }
         let between_children = h.iter().map(|x| 0.5 * x).collect();
@@ -154,12 +178,18 @@ impl SelfExchange {
             onto_itself,
             between_children,
             landed,
+            from_sibling,
+            from_uncle,
         }
     }
 
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
-        (self.onto_itself.len() + self.between_children.len() + self.landed.len())
+        (self.onto_itself.len()
+            + self.between_children.len()
+            + self.landed.len()
+            + self.from_sibling.len()
+            + self.from_uncle.len())
             * size_of::<f64>()
     }
 
@@ -176,6 +206,28 @@ impl SelfExchange {
         child_area: f64,
     ) -> f64 {
         let (Some(&lp), Some(&lc)) = (self.landed.get(parent), self.landed.get(child)) else {
+            return 1.0;
+        };
+        if !(lp > 0.0 && child_area > 0.0) {
+            return 1.0;
+        }
+        (lc / child_area) / (lp / parent_area)
+    }
+
+    /// The share of what a node P received from its sibling that P's child C takes per unit area, relative to
+    /// P's: (U_C/A_C)/(S_P/A_P), with S_P the flux the sibling's rays landed on P ([`Self::from_sibling`]) and
+    /// U_C the part of it that landed on C ([`Self::from_uncle`]). The sibling's light lands mostly near it,
+    /// along their shared boundary, not where P's whole view of its mesh is largest; the area-weighted mean of
+    /// the children's ratios is one. One where nothing was traced.
+    pub fn sibling_ratio(
+        &self,
+        parent: usize,
+        child: usize,
+        parent_area: f64,
+        child_area: f64,
+    ) -> f64 {
+        let (Some(&lp), Some(&lc)) = (self.from_sibling.get(parent), self.from_uncle.get(child))
+        else {
             return 1.0;
         };
         if !(lp > 0.0 && child_area > 0.0) {

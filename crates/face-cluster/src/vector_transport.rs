@@ -44,7 +44,8 @@
 //! least [`TRACED_MIN_FACES`] faces has a self-link carrying instead its traced self form factor F_NN,
 //! and its two one-sided children a link carrying their traced exchange, both as an isotropic irradiance t
 //! of their own ([`crate::self_exchange`]) that push hands each child in proportion to the trace's landings
-//! on it per unit area, (L_C/A_C)/(L_P/A_P); a siblings' link is never refined. A wider or smaller node whose children do
+//! on it per unit area, (L_C/A_C)/(L_P/A_P), and what a node's sibling sent it, at the first push, in
+//! proportion to where that sibling's own rays landed; a siblings' link is never refined. A wider or smaller node whose children do
 //! not face each other has a self-link that carries nothing and is split while its traced F_NN could carry
 //! more than ε, so that one-sided parts, or the faces' exact kernels, carry it (spread evenly over a slab,
 //! its top's light would reach its bottom; over a few facets, a facet beside the sibling would get no more
@@ -647,7 +648,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
             return LinkCoefficient::vector(target.cone().axis * link.coefficient);
         }
         if traced_between(target, src).is_some() {
-            return LinkCoefficient::traced(link.coefficient);
+            return LinkCoefficient::from_sibling(link.coefficient);
         }
         let (d, r2) = centroid_geometry(target.centroid(), src.centroid());
         let d_c = bound_direction(target, src);
@@ -701,6 +702,7 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
         h.isotropic += flux * c.isotropic;
         h.traced += flux * c.traced;
+        h.from_sibling += flux * c.from_sibling;
     }
 
     fn push(
@@ -713,13 +715,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         // its traced self-exchange in proportion to how much of their view the parts' mesh fills.
         let mut down = h.moved(child.centroid() - parent.centroid());
         if let (FaceNode::Cluster(p), FaceNode::Cluster(c)) = (parent, child) {
-            down.traced *= p.ctx.exchange.landing_ratio(
-                p.id as usize,
-                c.id as usize,
-                p.node().area,
-                c.node().area,
-            );
+            let x = &p.ctx.exchange;
+            let (i, j, ap, ac) = (p.id as usize, c.id as usize, p.node().area, c.node().area);
+            down.traced = down.traced * x.landing_ratio(i, j, ap, ac)
+                + down.from_sibling * x.sibling_ratio(i, j, ap, ac);
+        } else {
+            down.traced += down.from_sibling;
         }
+        down.from_sibling = Rgb::ZERO;
         down
     }
 

@@ -80,6 +80,36 @@ fn landings_add_up_and_pushing_by_them_keeps_the_total() {
     assert!(checked > 100, "only {checked} nodes received any light");
 }
 
+/// What a node's sibling sends onto it lands on its children: at every inner node that received any, the
+/// children's shares of it add up to it (Σ_C U_C = S_P), so pushing by the sibling ratio keeps its total,
+/// Σ_C A_C ratio_C = A_P; and nothing a sibling sends lands outside the pair (S of a root is zero).
+#[test]
+fn a_sibling_s_light_lands_on_the_children_and_is_kept() {
+    let (tree, x) = concentric(2);
+    for r in tree.roots() {
+        assert_eq!(x.from_sibling[r], 0.0);
+    }
+    let mut checked = 0;
+    for (p, node) in tree.nodes().iter().enumerate() {
+        if node.is_leaf() || x.from_sibling[p] <= 0.0 {
+            continue;
+        }
+        let landed: f64 = node.children().map(|c| x.from_uncle[c]).sum();
+        let (s, a) = (x.from_sibling[p], node.area);
+        assert!((landed - s).abs() <= 1e-9 * s, "node {p}: {landed} vs {s}");
+        let kept: f64 = node
+            .children()
+            .map(|c| tree.node(c).area * x.sibling_ratio(p, c, a, tree.node(c).area))
+            .sum();
+        assert!((kept - a).abs() <= 1e-9 * a, "node {p}: {kept} vs {a}");
+        checked += 1;
+    }
+    assert!(
+        checked > 100,
+        "only {checked} nodes received light from a sibling"
+    );
+}
+
 #[test]
 fn one_and_two_threads_trace_the_same_bits() {
     let (_, one) = concentric(1);
