@@ -190,7 +190,7 @@ pub use face_node::{ClusterRef, FaceContext, FaceNode};
 pub use irradiance_gradient::IrradianceField;
 pub use moments::{Moments, SymMat3};
 pub use params::FaceClusterParams;
-pub use self_exchange::{SELF_RAYS, SelfExchange, SelfExchangeMode};
+pub use self_exchange::{Landing, SELF_RAYS, SelfExchange, SelfExchangeMode};
 pub use solver::{DEFAULT_CACHE_DIR, DEFAULT_EPSILON, FaceClusterSolveParams, FaceClusterSolver};
 pub use tree::{FaceClusterTree, Node};
 pub use vector_transport::VectorTransport;

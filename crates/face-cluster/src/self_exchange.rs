@@ -88,6 +88,17 @@ pub struct SelfExchange {
     pub from_uncle: Vec<f64>,
 }
 
+/// Which of the trace's landings hands a node's traced light down to its children.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Landing {
+    /// Where the node's whole mesh sent light ([`SelfExchange::landed`]): for its self-exchange and what its
+    /// ancestors passed down.
+    Mesh,
+    /// Where the node's sibling sent light ([`SelfExchange::from_sibling`], [`SelfExchange::from_uncle`]):
+    /// for what the sibling link delivered to the node itself.
+    Sibling,
+}
+
 impl SelfExchange {
     /// Traces at least `rays` rays from each face of `tree` (and [`SELF_RAYS_TOTAL`] in all) through `accel`
     /// (its scene's faces), streams from `seed`.
@@ -194,45 +205,28 @@ impl SelfExchange {
     }
 
     /// The share of a traced exchange delivered evenly to `parent` that its child `child` takes per unit
-    /// area, relative to the parent's: (L_C/A_C)/(L_P/A_P) with L the flux landed ([`Self::landed`]). Light
-    /// a rough surface sends onto itself lands where more of the view is the surface itself, in its valleys
-    /// rather than on its ridges; the area-weighted mean of the children's ratios is one, so pushing by it
-    /// keeps the node's total. One where nothing was traced.
+    /// area, relative to the parent's: (L_C/A_C)/(L_P/A_P), with L the flux `which` says landed. Light a rough
+    /// surface sends onto itself lands where more of the view is the surface itself, in its valleys rather
+    /// than on its ridges ([`Landing::Mesh`]); what a sibling sends lands mostly near it, along their shared
+    /// boundary ([`Landing::Sibling`]). The area-weighted mean of the children's ratios is one, so pushing by
+    /// it keeps the node's total. One where nothing was traced.
     pub fn landing_ratio(
         &self,
+        which: Landing,
         parent: usize,
         child: usize,
         parent_area: f64,
         child_area: f64,
     ) -> f64 {
-        let (Some(&lp), Some(&lc)) = (self.landed.get(parent), self.landed.get(child)) else {
-            return 1.0;
+        let (p, c) = match which {
+            Landing::Mesh => (self.landed.get(parent), self.landed.get(child)),
+            Landing::Sibling => (self.from_sibling.get(parent), self.from_uncle.get(child)),
         };
-        if !(lp > 0.0 && child_area > 0.0) {
-            return 1.0;
+        match (p, c) {
+            (Some(&p), Some(&c)) if p > 0.0 && child_area > 0.0 => {
+                (c / child_area) / (p / parent_area)
+            }
+            _ => 1.0,
         }
-        (lc / child_area) / (lp / parent_area)
-    }
-
-    /// The share of what a node P received from its sibling that P's child C takes per unit area, relative to
-    /// P's: (U_C/A_C)/(S_P/A_P), with S_P the flux the sibling's rays landed on P ([`Self::from_sibling`]) and
-    /// U_C the part of it that landed on C ([`Self::from_uncle`]). The sibling's light lands mostly near it,
-    /// along their shared boundary, not where P's whole view of its mesh is largest; the area-weighted mean of
-    /// the children's ratios is one. One where nothing was traced.
-    pub fn sibling_ratio(
-        &self,
-        parent: usize,
-        child: usize,
-        parent_area: f64,
-        child_area: f64,
-    ) -> f64 {
-        let (Some(&lp), Some(&lc)) = (self.from_sibling.get(parent), self.from_uncle.get(child))
-        else {
-            return 1.0;
-        };
-        if !(lp > 0.0 && child_area > 0.0) {
-            return 1.0;
-        }
-        (lc / child_area) / (lp / parent_area)
     }
 }

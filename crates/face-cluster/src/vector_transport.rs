@@ -74,6 +74,7 @@ use crate::face_node::FaceNode;
 use crate::irradiance_gradient::{
     IrradianceField, JACOBIAN_EVALUATIONS, central_jacobian, point_field,
 };
+use crate::self_exchange::Landing;
 
 /// A single-face source is near when its bounding radius exceeds this fraction of the distance between the
 /// two ends' centres: there the point form's relative error, of order (R/r)², would pass 1%, and the link
@@ -717,8 +718,8 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         if let (FaceNode::Cluster(p), FaceNode::Cluster(c)) = (parent, child) {
             let x = &p.ctx.exchange;
             let (i, j, ap, ac) = (p.id as usize, c.id as usize, p.node().area, c.node().area);
-            down.traced = down.traced * x.landing_ratio(i, j, ap, ac)
-                + down.from_sibling * x.sibling_ratio(i, j, ap, ac);
+            down.traced = down.traced * x.landing_ratio(Landing::Mesh, i, j, ap, ac)
+                + down.from_sibling * x.landing_ratio(Landing::Sibling, i, j, ap, ac);
         } else {
             down.traced += down.from_sibling;
         }

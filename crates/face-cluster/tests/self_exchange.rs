@@ -2,7 +2,7 @@
 //! enclosure (F = 1) and none onto itself, so by reciprocity the enclosure sends the share A_in/A_out to the
 //! body and keeps 1 − A_in/A_out for itself (Siegel & Howell, enclosure and reciprocity relations).
 
-use radlab_face_cluster::{FaceClusterParams, FaceClusterTree, SELF_RAYS, SelfExchange};
+use radlab_face_cluster::{FaceClusterParams, FaceClusterTree, Landing, SELF_RAYS, SelfExchange};
 use radlab_scene::{Accel, MethodParams, builtin};
 
 /// The concentric-spheres scene's two roots, inner (facing out) first, with their traced self-shares.
@@ -68,7 +68,10 @@ fn landings_add_up_and_pushing_by_them_keeps_the_total() {
         }
         let kept: f64 = node
             .children()
-            .map(|c| tree.node(c).area * x.landing_ratio(p, c, node.area, tree.node(c).area))
+            .map(|c| {
+                tree.node(c).area
+                    * x.landing_ratio(Landing::Mesh, p, c, node.area, tree.node(c).area)
+            })
             .sum();
         assert!(
             (kept - node.area).abs() <= 1e-9 * node.area,
@@ -99,7 +102,9 @@ fn a_sibling_s_light_lands_on_the_children_and_is_kept() {
         assert!((landed - s).abs() <= 1e-9 * s, "node {p}: {landed} vs {s}");
         let kept: f64 = node
             .children()
-            .map(|c| tree.node(c).area * x.sibling_ratio(p, c, a, tree.node(c).area))
+            .map(|c| {
+                tree.node(c).area * x.landing_ratio(Landing::Sibling, p, c, a, tree.node(c).area)
+            })
             .sum();
         assert!((kept - a).abs() <= 1e-9 * a, "node {p}: {kept} vs {a}");
         checked += 1;
