@@ -65,11 +65,11 @@
 //! --method face-cluster --set cache_dir=EMPTY`): bumpy sphere 29.3 s wall, 2.47 GiB peak RSS, solve 1.32 s,
 //! 2.65% relative L1 (1.77% at ε = 1e-5); terrain 31.6 s, 2.50 GiB, solve 0.29 s, 3.00% (2.63% at ε = 1e-5);
 //! the trace's 32 rays a face are 32M of the rays and 7–9 s of the wall time (22.1 and 23.1 s with 4).
-//! Solve time against k = 10³ … 10⁶ (`experiments/scaling-clusters.toml`'s scenes, face clusters alone, 4
-//! trace rays a face, which do not change the solve's work on these scenes' links by more than 1%): bumpy
-//! sphere 0.56, 0.77, 0.99, 1.58 s (slope 0.15), terrain 0.06, 0.10, 0.52, 0.41 s (0.32, above the 0.3
-//! target; with `radlab solve` alone, no evaluation between steps, 0.065, 0.105, 0.49, 0.28 s, slope 0.26),
-//! concentric spheres 0.61, 0.98, 1.84, 2.12 s (0.19); memory slopes 0.56, 0.75, 0.55.
+//! Solve time against k = 10³ … 10⁶ (`experiments/scaling-clusters.toml`'s scenes, face clusters alone,
+//! 1,024-path references, evaluation between steps): bumpy sphere 0.63, 0.89, 1.22, 1.73 s (slope 0.14),
+//! terrain 0.07, 0.11, 0.58, 0.46 s (0.32, above the 0.3 target; with `radlab solve` alone, no evaluation
+//! between steps, 0.065, 0.105, 0.49, 0.28 s, slope 0.26), concentric spheres 0.65, 1.11, 2.31, 2.47 s
+//! (0.20); memory slopes 0.55, 0.75, 0.55.
 //!
 //! Measured before the volume hierarchy above the roots and the near-source vectors existed (release, 2 threads
 //! on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
