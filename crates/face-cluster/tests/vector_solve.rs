@@ -696,3 +696,17 @@ fn a_lamp_standing_on_a_floor_lights_the_floor_in_front_of_it() {
         }
     }
 }
+
+/// An unknown `irradiance_field` is refused with the key and the values it takes.
+#[test]
+fn a_bad_irradiance_field_names_the_key() {
+    let bad = FaceClusterSolveParams::from_pairs(&[(
+        "irradiance_field".to_string(),
+        "quadratic".to_string(),
+    )]);
+    let message = bad.expect_err("an unknown value").to_string();
+    assert!(
+        message.contains("irradiance_field") && message.contains("linear"),
+        "{message}"
+    );
+}
