@@ -329,7 +329,8 @@ fn traced_tree_node(n: &crate::Node) -> bool {
 /// receives from the sibling depends on where it lies (a facet beside the sibling sees more of it than one
 /// across the node) more than an even spread allows: a 48-face furnace sphere, whose one-sided nodes have 12
 /// faces or fewer, had faces 2.1% apart at ρ = 0.5 with even spreads, and is exact refined to its faces. Such
-/// nodes keep the cap's rule and reach the exact kernels between faces where ε asks.
+/// nodes keep the cap's rule and reach the exact kernels between faces where ε asks. The terrain does not
+/// mind: 16, 32 and 64 agree within 0.02% relative L1 at 10⁴ and 10⁵ faces, ε = 1e-4 … 1e-6.
 pub const TRACED_MIN_FACES: usize = 32;
 
 /// The traced flux per unit radiosity that each of two one-sided sibling clusters sends onto the other,
