@@ -24,7 +24,7 @@
 //! does not. Each face draws from its own stream (seed, face), and the sums are made in face order, so the
 //! factors do not depend on the number of threads.
 
-use radlab_scene::{Accel, Scene, sampling};
+use radlab_scene::{Accel, AreaSampler, Scene, sampling};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -119,7 +119,7 @@ impl SelfExchange {
                 return Vec::new();
             }
             let rays = rays.max((SELF_RAYS_TOTAL * face.area / total).ceil() as u32);
-            let polygon = scene.polygon(f);
+            let start = AreaSampler::new(scene.polygon(f));
             let mut r = sampling::rng(seed, f as u64 ^ 0x7365_6c66_6578_6368);
             let w = face.area / rays as f64;
             let mut out = Vec::new();
@@ -127,7 +127,7 @@ impl SelfExchange {
                 let (u, v) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
                 let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
                 let d = sampling::cosine_hemisphere(face.normal, u1, u2);
-                let Some(hit) = accel.intersect_from(f, polygon.point_at(u, v), d) else {
+                let Some(hit) = accel.intersect_from(f, start.sample(u, v), d) else {
                     continue;
                 };
                 if scene.faces[hit.face].normal.dot(d) >= 0.0 {
