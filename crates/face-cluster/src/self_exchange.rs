@@ -18,8 +18,8 @@
 //!
 //! A convex node sends nothing onto itself (no ray returns), a spherical cap of half-angle θ seen from
 //! inside sends (1 − cos θ)/2 of its light (inside a sphere of radius R, F_ij = A_j/(4πR²) for any two
-//! parts), and a rough, nearly flat patch of ground something in between; the self-links of [`crate::VectorTransport`] carry these factors where the node's children do
-//! not face each other as a whole (a ridge, a rough patch of terrain), so that light a heightfield sends onto
+//! parts), and a rough, nearly flat patch of ground something in between; the self-links of
+//! [`crate::VectorTransport`] carry these factors where the node's children do not face each other as a whole (a ridge, a rough patch of terrain), so that light a heightfield sends onto
 //! itself is not lost. Like the hierarchy, this pass reads every input face (O(k · rays) rays); the solve
 //! does not. Each face draws from its own stream (seed, face), and the sums are made in face order, so the
 //! factors do not depend on the number of threads.
@@ -43,8 +43,9 @@ pub enum SelfExchangeMode {
     /// [`crate::vector_transport::TRACED_MIN_FACES`] (32) faces has a self-link carrying its traced F_NN, and its
     /// two children, if one-sided, a link carrying the traced exchange between them, never refined; both
     /// handed down the receiver by where the trace's rays landed ([`SelfExchange::landing_ratio`]; by default
-    /// at least [`SELF_RAYS`] rays per input face before the solve). Other nodes keep the cap's rule if they are concave; otherwise their self-link carries nothing
-    /// and is refined while their traced F_NN could carry more than ε. The default.
+    /// at least [`SELF_RAYS`] rays per input face before the solve). Other nodes keep the cap's rule if they
+    /// are concave; otherwise their self-link carries nothing and is refined while their traced F_NN could
+    /// carry more than ε. The default.
     #[default]
     Traced,
 }

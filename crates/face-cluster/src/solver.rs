@@ -187,24 +187,28 @@ impl MethodParams for FaceClusterSolveParams {
     }
 
     fn default_values() -> Vec<(String, String)> {
+        let d = Self::default();
         HierarchicalParams::default_values()
             .into_iter()
             .filter(|(k, _)| k != "lazy_linking")
-            .map(|(k, v)| {
-                let d = Self::default();
-                match k.as_str() {
-                    "epsilon" => (k, d.engine.epsilon.to_string()),
-                    "error_norm" => (k, "\"power\"".to_string()),
-                    "reconstruction" => (k, format!("\"{}\"", d.engine.reconstruction.as_str())),
-                    _ => (k, v),
-                }
+            .map(|(k, v)| match k.as_str() {
+                "epsilon" => (k, d.engine.epsilon.to_string()),
+                "error_norm" => (k, "\"power\"".to_string()),
+                "reconstruction" => (k, format!("\"{}\"", d.engine.reconstruction.as_str())),
+                _ => (k, v),
             })
             .chain([
                 ("cache_dir".to_string(), format!("{DEFAULT_CACHE_DIR:?}")),
                 ("row_normalisation".to_string(), "\"off\"".to_string()),
-                ("self_exchange".to_string(), "\"traced\"".to_string()),
-                ("irradiance_field".to_string(), "\"linear\"".to_string()),
-                ("self_rays".to_string(), SELF_RAYS.to_string()),
+                (
+                    "self_exchange".to_string(),
+                    format!("\"{}\"", d.self_exchange.as_str()),
+                ),
+                (
+                    "irradiance_field".to_string(),
+                    format!("\"{}\"", d.irradiance_field.as_str()),
+                ),
+                ("self_rays".to_string(), d.self_rays.to_string()),
             ])
             .collect()
     }

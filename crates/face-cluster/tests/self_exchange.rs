@@ -122,17 +122,23 @@ fn one_and_two_threads_trace_the_same_bits() {
     assert_eq!(one, two);
 }
 
+/// An unknown choice of `self_exchange` or `irradiance_field` is refused with the key and a value it takes.
 #[test]
-fn a_bad_self_exchange_names_the_key() {
-    let bad = radlab_face_cluster::FaceClusterSolveParams::from_pairs(&[(
-        "self_exchange".to_string(),
-        "sometimes".to_string(),
-    )]);
-    let message = bad.expect_err("an unknown value").to_string();
-    assert!(
-        message.contains("self_exchange") && message.contains("traced"),
-        "{message}"
-    );
+fn a_bad_choice_names_the_key() {
+    for (key, value, allowed) in [
+        ("self_exchange", "sometimes", "traced"),
+        ("irradiance_field", "quadratic", "linear"),
+    ] {
+        let bad = radlab_face_cluster::FaceClusterSolveParams::from_pairs(&[(
+            key.to_string(),
+            value.to_string(),
+        )]);
+        let message = bad.expect_err("an unknown value").to_string();
+        assert!(
+            message.contains(key) && message.contains(allowed),
+            "{message}"
+        );
+    }
 }
 
 /// `self_rays` outside 1..=1024, or not a whole number, is refused with the key and the range named.
