@@ -36,8 +36,12 @@ pub struct ClampedIrradiance {
     /// their view their own mesh fills ([`crate::self_exchange`]) as it is pushed down.
     pub traced: Rgb,
     /// The part of t that this node's sibling sent it (its traced exchange link), not yet handed down: push
-    /// spreads it by where the sibling's own rays landed, then adds it to t.
+    /// spreads it by where the sibling's own rays landed, then adds it to `outside`.
     pub from_sibling: Rgb,
+    /// The part of t that the siblings of this node's ancestors sent them, handed down: push spreads it by
+    /// where the trace's rays from beyond the node's parent landed, near the boundary they crossed rather
+    /// than over the node's own valleys.
+    pub outside: Rgb,
     /// ∂e/∂y per channel: at a point y of the node, e(y) = e + J (y − c), c its centroid.
     pub gradient: [DMat3; 3],
 }
@@ -55,6 +59,7 @@ impl ClampedIrradiance {
         isotropic: Rgb::ZERO,
         traced: Rgb::ZERO,
         from_sibling: Rgb::ZERO,
+        outside: Rgb::ZERO,
         gradient: [DMat3::ZERO; 3],
     };
 
@@ -76,7 +81,11 @@ impl ClampedIrradiance {
 
     /// The unclamped irradiance n·e + s + t of channel `k` at the centroid of a face with unit normal `n`.
     pub fn linear(&self, n: DVec3, k: usize) -> f64 {
-        n.dot(self.vector[k]) + self.isotropic[k] + self.traced[k] + self.from_sibling[k]
+        n.dot(self.vector[k])
+            + self.isotropic[k]
+            + self.traced[k]
+            + self.from_sibling[k]
+            + self.outside[k]
     }
 
     /// The irradiance I(n) = max(0, n·e + s + t) at the centroid of a face with unit normal `n`, per channel.
@@ -90,7 +99,7 @@ impl ClampedIrradiance {
 
     /// The isotropic parts s + t.
     pub fn isotropic_total(&self) -> Rgb {
-        self.isotropic + self.traced + self.from_sibling
+        self.isotropic + self.traced + self.from_sibling + self.outside
     }
 }
 
@@ -100,6 +109,7 @@ impl LinearState for ClampedIrradiance {
         self.isotropic += c * x.isotropic;
         self.traced += c * x.traced;
         self.from_sibling += c * x.from_sibling;
+        self.outside += c * x.outside;
         for k in 0..3 {
             self.gradient[k] += x.gradient[k] * c[k];
         }
@@ -302,6 +312,7 @@ mod tests {
                     isotropic: Rgb::splat(c.isotropic),
                     traced: Rgb::splat(c.traced),
                     from_sibling: Rgb::splat(c.from_sibling),
+                    outside: Rgb::ZERO,
                     gradient: [c.gradient; 3],
                 },
             );

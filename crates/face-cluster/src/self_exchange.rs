@@ -13,8 +13,10 @@
 //!
 //! The same rays say where that light lands: L_N, what the node's mesh sends onto N's faces, and for a
 //! node a with sibling b what b sends onto a and onto each of a's children (the rays whose deepest common
-//! node is a's parent). Push hands a node's traced light down by these (per unit area, the totals kept), so
-//! a valley gets more than a ridge and a sibling's light lands near the sibling.
+//! node is a's parent), and what lands on N from beyond it, L_N − A_N F_NN. Push hands a node's traced light
+//! down by these (per unit area, the totals kept), so a valley gets more than a ridge, and a sibling's light,
+//! at every level below the link that brought it, lands near the boundary it crossed; and the answers hand
+//! it on down to the faces below the deepest node the solve made.
 //!
 //! A convex node sends nothing onto itself (no ray returns), a spherical cap of half-angle θ seen from
 //! inside sends (1 − cos θ)/2 of its light (inside a sphere of radius R, F_ij = A_j/(4πR²) for any two
@@ -24,7 +26,7 @@
 //! does not. Each face draws from its own stream (seed, face), and the sums are made in face order, so the
 //! factors do not depend on the number of threads.
 
-use radlab_scene::{Accel, AreaSampler, Scene, sampling};
+use radlab_scene::{Accel, AreaSampler, Rgb, Scene, sampling};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -98,6 +100,11 @@ pub enum Landing {
     /// Where the node's sibling sent light ([`SelfExchange::from_sibling`], [`SelfExchange::from_uncle`]):
     /// for what the sibling link delivered to the node itself.
     Sibling,
+    /// Where light from beyond the node's grandparent landed (rays whose deepest common node with it lies
+    /// above its grandparent: L − A F_NN, less what its sibling and its uncle sent): for what the siblings of
+    /// its parent's ancestors sent, which lands near the boundaries it crossed rather than in the node's own
+    /// valleys.
+    Outside,
 }
 
 impl SelfExchange {
@@ -205,6 +212,54 @@ impl SelfExchange {
             * size_of::<f64>()
     }
 
+    /// The traced light node `parent` received, handed to its child `child` as push hands it
+    /// ([`Self::landing_ratio`]): its own and its ancestors' self-exchange (`traced`) by where the mesh's rays
+    /// landed, what its sibling sent (`from_sibling`) by where the sibling's rays landed, and what its
+    /// ancestors' siblings sent (`outside`) by where the rays from beyond `parent` landed. Returns the child's
+    /// `(traced, outside)`: what the sibling sent the parent comes from outside the child too.
+    pub fn hand_down(
+        &self,
+        tree: &FaceClusterTree,
+        parent: usize,
+        child: usize,
+        [traced, from_sibling, outside]: [Rgb; 3],
+    ) -> (Rgb, Rgb) {
+        let (ap, ac) = (tree.node(parent).area, tree.node(child).area);
+        let ratio = |which| self.landing_ratio(which, parent, child, ap, ac);
+        (
+            traced * ratio(Landing::Mesh),
+            from_sibling * ratio(Landing::Sibling) + outside * ratio(Landing::Outside),
+        )
+    }
+
+    /// The traced light `[traced, from_sibling, outside]` node `from` received, handed down the tree to its
+    /// descendant `to` by the path's [`Self::hand_down`] steps, in all: where the solve stopped above the
+    /// faces, each face below still takes its share by where the trace's rays landed, not the node's mean.
+    pub fn hand_down_to(
+        &self,
+        tree: &FaceClusterTree,
+        from: usize,
+        to: usize,
+        light: [Rgb; 3],
+    ) -> Rgb {
+        let mut path = Vec::new();
+        let mut n = to;
+        while n != from {
+            path.push(n);
+            match tree.node(n).parent() {
+                Some(p) => n = p,
+                None => return light[0] + light[1] + light[2], // `to` is not below `from`
+            }
+        }
+        let (mut parent, mut light) = (from, light);
+        for &child in path.iter().rev() {
+            let (t, o) = self.hand_down(tree, parent, child, light);
+            light = [t, Rgb::ZERO, o];
+            parent = child;
+        }
+        light[0] + light[1] + light[2]
+    }
+
     /// The share of a traced exchange delivered evenly to `parent` that its child `child` takes per unit
     /// area, relative to the parent's: (L_C/A_C)/(L_P/A_P), with L the flux `which` says landed. Light a rough
     /// surface sends onto itself lands where more of the view is the surface itself, in its valleys rather
@@ -219,12 +274,32 @@ impl SelfExchange {
         parent_area: f64,
         child_area: f64,
     ) -> f64 {
+        let at = |x: &[f64], n: usize| x.get(n).copied();
         let (p, c) = match which {
-            Landing::Mesh => (self.landed.get(parent), self.landed.get(child)),
-            Landing::Sibling => (self.from_sibling.get(parent), self.from_uncle.get(child)),
+            Landing::Mesh => (at(&self.landed, parent), at(&self.landed, child)),
+            Landing::Sibling => (at(&self.from_sibling, parent), at(&self.from_uncle, child)),
+            Landing::Outside => {
+                // Landed from beyond the node: all its landings less those from within.
+                let beyond = |n: usize| Some(at(&self.landed, n)? - at(&self.onto_itself, n)?);
+                (
+                    beyond(parent)
+                        .zip(at(&self.from_sibling, parent))
+                        .map(|(b, s)| b - s),
+                    beyond(child)
+                        .zip(at(&self.from_sibling, child))
+                        .zip(at(&self.from_uncle, child))
+                        .map(|((b, s), u)| (b - s - u).max(0.0)),
+                )
+            }
         };
         match (p, c) {
-            (Some(&p), Some(&c)) if p > 0.0 && child_area > 0.0 => {
+            // Sums of many rays less sums of most of them: below 1e-9 of the node's landings (rounding),
+            // nothing was traced from there.
+            (Some(p), Some(c))
+                if p > 1e-9 * at(&self.landed, parent).unwrap_or(0.0)
+                    && p > 0.0
+                    && child_area > 0.0 =>
+            {
                 (c / child_area) / (p / parent_area)
             }
             _ => 1.0,

@@ -494,11 +494,24 @@ impl<'a> FaceClusterSolver<'a> {
             .map_or(ClampedIrradiance::ZERO, |i| self.at_face(i, face))
     }
 
-    /// The irradiance of engine node `i` (a cluster) moved to the centroid of input face `face` below it.
+    /// The irradiance of engine node `i` (a cluster) moved to the centroid of input face `face` below it, its
+    /// traced light handed down the tree to the face by where the trace's rays landed (spread evenly over the
+    /// faces below `i`, an open book's floor took the same light at the crease as at the far edge).
     fn at_face(&self, i: u32, face: FaceId) -> ClampedIrradiance {
         let node = &self.engine.nodes()[i as usize];
-        self.engine.irradiance()[i as usize]
-            .moved(self.scene.faces[face].centroid - node.centroid())
+        let mut h = self.engine.irradiance()[i as usize]
+            .moved(self.scene.faces[face].centroid - node.centroid());
+        if let FaceNode::Cluster(c) = node {
+            let tree = &self.ctx.tree;
+            h.traced = self.ctx.exchange.hand_down_to(
+                tree,
+                c.id as usize,
+                tree.leaf_of_face(face),
+                [h.traced, h.from_sibling, h.outside],
+            );
+            (h.from_sibling, h.outside) = (Rgb::ZERO, Rgb::ZERO);
+        }
+        h
     }
 
     /// Every input face's gathered irradiance, computed at the first query after a step (linear in k: for

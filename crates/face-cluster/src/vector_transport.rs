@@ -44,8 +44,9 @@
 //! least [`TRACED_MIN_FACES`] faces has a self-link carrying instead its traced self form factor F_NN,
 //! and its two one-sided children a link carrying their traced exchange, both as an isotropic irradiance t
 //! of their own ([`crate::self_exchange`]) that push hands each child in proportion to the trace's landings
-//! on it per unit area, (L_C/A_C)/(L_P/A_P), and what a node's sibling sent it, at the first push, in
-//! proportion to where that sibling's own rays landed; a siblings' link is never refined. A wider or smaller node whose children do
+//! on it per unit area, (L_C/A_C)/(L_P/A_P), what a node's sibling sent it, at the first push, in
+//! proportion to where that sibling's own rays landed, and below that by where the rays from beyond each
+//! node landed (near the boundary the light crossed); a siblings' link is never refined. A wider or smaller node whose children do
 //! not face each other has a self-link that carries nothing and is split while its traced F_NN could carry
 //! more than ε, so that one-sided parts, or the faces' exact kernels, carry it (spread evenly over a slab,
 //! its top's light would reach its bottom; over a few facets, a facet beside the sibling would get no more
@@ -74,7 +75,6 @@ use crate::face_node::FaceNode;
 use crate::irradiance_gradient::{
     IrradianceField, JACOBIAN_EVALUATIONS, central_jacobian, point_field,
 };
-use crate::self_exchange::Landing;
 
 /// A single-face source is near when its bounding radius exceeds this fraction of the distance between the
 /// two ends' centres: there the point form's relative error, of order (R/r)², would pass 1%, and the link
@@ -714,15 +714,19 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         h: &ClampedIrradiance,
     ) -> ClampedIrradiance {
         // The parent's field at the child's centroid (unchanged where the parent gathered no Jacobian), and
-        // its traced self-exchange in proportion to how much of their view the parts' mesh fills.
+        // its traced light by where the trace's rays landed: its self-exchange in proportion to how much of
+        // their view the parts' mesh fills, what siblings sent by where light from beyond landed.
         let mut down = h.moved(child.centroid() - parent.centroid());
         if let (FaceNode::Cluster(p), FaceNode::Cluster(c)) = (parent, child) {
-            let x = &p.ctx.exchange;
-            let (i, j, ap, ac) = (p.id as usize, c.id as usize, p.node().area, c.node().area);
-            down.traced = down.traced * x.landing_ratio(Landing::Mesh, i, j, ap, ac)
-                + down.from_sibling * x.landing_ratio(Landing::Sibling, i, j, ap, ac);
+            (down.traced, down.outside) = p.ctx.exchange.hand_down(
+                &p.ctx.tree,
+                p.id as usize,
+                c.id as usize,
+                [down.traced, down.from_sibling, down.outside],
+            );
         } else {
-            down.traced += down.from_sibling;
+            down.traced += down.from_sibling + down.outside;
+            down.outside = Rgb::ZERO;
         }
         down.from_sibling = Rgb::ZERO;
         down

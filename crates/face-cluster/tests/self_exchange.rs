@@ -115,6 +115,50 @@ fn a_sibling_s_light_lands_on_the_children_and_is_kept() {
     );
 }
 
+/// What lands on a node from beyond its parent (the rays whose deepest common node is above the parent:
+/// L − A F_NN less what the sibling and the uncle sent) lands on its children from beyond their grandparent
+/// or from their uncle: Σ_C (L_C − A_C F_CC − S_C − U_C) = L_P − A_P F_PP − S_P, so pushing by the outside
+/// ratio keeps the total, Σ_C A_C ratio_C = A_P; and a root receives nothing from beyond itself.
+#[test]
+fn light_from_beyond_a_node_lands_on_its_children_and_is_kept() {
+    let (tree, x) = concentric(2);
+    let beyond = |n: usize| x.landed[n] - x.onto_itself[n];
+    for r in tree.roots() {
+        assert!(
+            beyond(r).abs() <= 1e-9 * x.landed[r].max(1e-300),
+            "root {r}"
+        );
+    }
+    let mut checked = 0;
+    for (p, node) in tree.nodes().iter().enumerate() {
+        let from_beyond = beyond(p) - x.from_sibling[p];
+        if node.is_leaf() || from_beyond <= 1e-6 * x.landed[p] {
+            continue;
+        }
+        let landed: f64 = node
+            .children()
+            .map(|c| beyond(c) - x.from_sibling[c] - x.from_uncle[c])
+            .sum();
+        assert!(
+            (landed - from_beyond).abs() <= 1e-9 * x.landed[p],
+            "node {p}: {landed} vs {from_beyond}"
+        );
+        let a = node.area;
+        let kept: f64 = node
+            .children()
+            .map(|c| {
+                tree.node(c).area * x.landing_ratio(Landing::Outside, p, c, a, tree.node(c).area)
+            })
+            .sum();
+        assert!((kept - a).abs() <= 1e-6 * a, "node {p}: {kept} vs {a}");
+        checked += 1;
+    }
+    assert!(
+        checked > 100,
+        "only {checked} nodes received light from beyond their parent"
+    );
+}
+
 #[test]
 fn one_and_two_threads_trace_the_same_bits() {
     let (_, one) = concentric(1);
