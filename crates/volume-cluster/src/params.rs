@@ -14,9 +14,11 @@ pub enum Transfer {
     /// A cluster acts as projected area A/4 in every direction (Smits et al. 1994 β links; Sillion 1995
     /// isotropic clusters). O(1) per link; a flat cluster facing a light gets a quarter of the truth.
     Isotropic,
-    /// A cluster source sums its faces' Σ A_i max(0, n_i·d) B_i toward the receiver, a cluster receiver hands
-    /// each face its own cosine share (Smits et al. 1994 α links; Sillion 1995 oriented clusters). O(faces)
-    /// per link; the default: on the Cornell box and the concentric spheres it has the lowest error of the three.
+    /// A cluster source sends its faces' Σ A_i max(0, n_i·d) B_i toward the receiver exactly (summing its faces
+    /// where its normal cone straddles d), a cluster receiver hands each face its own cosine share through the
+    /// normal cones (Smits et al. 1994 α links; Sillion 1995 oriented clusters). O(1) per link but for
+    /// straddling ends; the default: on the Cornell box and the concentric spheres it has the lowest error of
+    /// the three.
     #[default]
     Alpha,
     /// Clusters keep order-2 spherical-harmonic descriptions of the intensity they send and the irradiance
