@@ -70,7 +70,8 @@
 //!   links are: their per-leaf gather sums to one), so a defect δ in a row sum of the discrete operator
 //!   becomes δρ/(1 − ρ) in B. Measured on `concentric-spheres?faces=600` with `row_normalisation = "off"`
 //!   (the `row_sums` example: area-mean row sum − 1, then the area-mean error of B against E/(1 − ρ)):
-//!   α δ = −3.2e-4 to −3.9e-4 (−0.35%, −3.2%, −24% at ρ = 0.9, 0.99, 0.999); directional δ = −4.0e-4 (−0.36%,
+//!   α δ = −5.1e-4 to −4.2e-4 (−0.46%, −4.1%, −29% at ρ = 0.9, 0.99, 0.999; −0.35%, −3.2%, −24% with its
+//!   former face-by-face receiver, exact in distance); directional δ = −4.0e-4 (−0.36%,
 //!   −3.8%, −28%); isotropic δ = −2.3e-2, inner sphere −0.10 (−18%, −70%). Before the normal cones
 //!   directional's receiver took order-2 harmonics of every link, leaking 6–9% of a lobe's peak behind each
 //!   face: δ = +8.7e-4, inner sphere +4.8e-3, rows up to 1.030 (+0.74%, +9.4% at ρ = 0.9, 0.99). In a closed
@@ -83,6 +84,7 @@
 //!   is sampled by rays (release, `radlab solve "builtin:concentric-spheres?faces=600&reflectance=0.999"
 //!   --set reconstruction=constant`, area-mean B against 1000): matrix −2.1%, hierarchical −15%, progressive
 //!   +47% (+0.36% and +4.2% at ρ = 0.9 and 0.99), and α −24%, −23% and +5.2% at ε = 1e-4, 3e-5 and 1e-5
+//!   with its former receiver (−29% and +5.2% at 1e-4 and 1e-5 now)
 //!   (229k, 302k, 369k links; directional alike, +5.2% at 1e-5, where the links are between patches).
 //! - `isotropic` loses energy wherever clusters are flat-ish (a cap of a sphere seen face-on is a quarter of
 //!   its true projected area at each end).

@@ -17,8 +17,9 @@ pub enum Transfer {
     /// A cluster source sends its faces' Σ A_i max(0, n_i·d) B_i toward the receiver exactly (summing its faces
     /// where its normal cone straddles d), a cluster receiver hands each face its own cosine share through the
     /// normal cones (Smits et al. 1994 α links; Sillion 1995 oriented clusters). O(1) per link but for
-    /// straddling ends; the default: on the Cornell box and the concentric spheres it has the lowest error of
-    /// the three.
+    /// straddling ends; the default: its exact source gives it the lowest error of the three, by little since
+    /// it shares directional's receiver (concentric spheres, 1e3 / 3e3 faces, ρ = 0.5: mean |B − 2|/2 0.126 /
+    /// 0.189% against directional's 0.135 / 0.199%; the Cornell box alike within 0.01%).
     #[default]
     Alpha,
     /// Clusters keep order-2 spherical-harmonic descriptions of the intensity they send and the irradiance
