@@ -61,6 +61,15 @@
 //! The terrain's remaining error is in the light it sends onto itself: its direct light alone (ρ = 0.01)
 //! is within 0.7% at 10⁵ faces (ε = 1e-8), and at ρ = 0.5 the error is spread over every part of the ground,
 //! the light's footprint 0.2% too dark and the far ground 0.4% too bright (net, relative to the whole).
+//! Since light a sibling sent keeps a channel of its own below its first level (handed down by where light
+//! from beyond each node landed) and the answers hand traced light down to every face (same setup, one run,
+//! 2026-12-01): terrain 10⁴ faces 1.50 / 1.40 / 1.33%, 10⁵ faces 2.08 / 1.72 / 1.60%, the bumpy sphere
+//! unchanged. What is left is mostly the trace's noise and its even source: 1.13% at 10⁴ faces and ε = 1e-6
+//! with 1,024 rays a face; refining every self-exchange to the faces' kernels instead (no traced links)
+//! reaches 0.84% after 34 s, and volume clusters (directional) 0.80% after 32 s.
+//! 10⁶ faces end to end with a cold cache, this build beside the previous one alternately on the same
+//! (slower) day: terrain 37.4 / 37.1 s against 42.6 / 38.2 s, 2.49 GiB; bumpy sphere 35.3 s, 2.47 GiB; relative
+//! L1 at 10⁶ faces 3.42% (bumpy) and 2.57% (terrain) against 1,024-path references.
 //! 10⁶ faces end to end with a cold cache (`/usr/bin/time -v radlab solve "builtin:bumpy-sphere?faces=1000000"
 //! --method face-cluster --set cache_dir=EMPTY`): bumpy sphere 29.3 s wall, 2.47 GiB peak RSS, solve 1.32 s,
 //! 2.65% relative L1 (1.77% at ε = 1e-5); terrain 31.6 s, 2.50 GiB, solve 0.29 s, 3.00% (2.63% at ε = 1e-5);
@@ -69,7 +78,13 @@
 //! 1,024-path references, evaluation between steps): bumpy sphere 0.63, 0.89, 1.22, 1.73 s (slope 0.14),
 //! terrain 0.07, 0.11, 0.58, 0.46 s (0.32, above the 0.3 target; with `radlab solve` alone, no evaluation
 //! between steps, 0.065, 0.105, 0.49, 0.28 s, slope 0.26), concentric spheres 0.65, 1.11, 2.31, 2.47 s
-//! (0.20); memory slopes 0.55, 0.75, 0.55.
+//! (0.20); memory slopes 0.55, 0.75, 0.55. Again after this session's changes (2026-12-01): bumpy sphere 0.70,
+//! 1.00, 1.18, 1.96 s (0.14), terrain 0.08, 0.12, 0.66, 0.54 s (0.32), concentric spheres 0.70, 1.22, 2.26,
+//! 2.63 s (0.20). The terrain's links go 15k, 17k, 58k, 25k: its fractal has 8 octaves, the finest 256 cells
+//! across, which 10⁴ faces (100 across) do not resolve and 10⁵ (316) do, so the scene itself gains detail up
+//! to 10⁵ faces; with `octaves=4` (resolved at every k) the slope is 0.28 (0.086, 0.092, 0.29, 0.51 s; links
+//! 15k, 16k, 30k, 31k; why they double from 10⁴ to 10⁵ there is not established: a suspect is the traced
+//! exchange's threshold, 32 faces, a count rather than a size).
 //!
 //! Measured before the volume hierarchy above the roots and the near-source vectors existed (release, 2 threads
 //! on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
