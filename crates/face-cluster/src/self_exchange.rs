@@ -215,8 +215,8 @@ impl SelfExchange {
     /// The traced light node `parent` received, handed to its child `child` as push hands it
     /// ([`Self::landing_ratio`]): its own and its ancestors' self-exchange (`traced`) by where the mesh's rays
     /// landed, what its sibling sent (`from_sibling`) by where the sibling's rays landed, and what its
-    /// ancestors' siblings sent (`outside`) by where the rays from beyond `parent` landed. Returns the child's
-    /// `(traced, outside)`: what the sibling sent the parent comes from outside the child too.
+    /// ancestors' siblings sent (`outside`) by where the rays from beyond `parent`'s parent landed. Returns the
+    /// child's `(traced, outside)`: what the sibling sent the parent comes from beyond the child's parent too.
     pub fn hand_down(
         &self,
         tree: &FaceClusterTree,
