@@ -83,8 +83,9 @@
 //! 2.63 s (0.20). The terrain's links go 15k, 17k, 58k, 25k: its fractal has 8 octaves, the finest 256 cells
 //! across, which 10⁴ faces (100 across) do not resolve and 10⁵ (316) do, so the scene itself gains detail up
 //! to 10⁵ faces; with `octaves=4` (resolved at every k) the slope is 0.28 (0.086, 0.092, 0.29, 0.51 s; links
-//! 15k, 16k, 30k, 31k; why they double from 10⁴ to 10⁵ there is not established: a suspect is the traced
-//! exchange's threshold, 32 faces, a count rather than a size).
+//! 15k, 16k, 30k, 31k; why they double from 10⁴ to 10⁵ there is not established: neither the traced
+//! exchange's 32-face threshold (256 gives the same 30,013 links at 10⁵) nor `min_element_size` (0.14, 0.3:
+//! unchanged) moves them).
 //!
 //! Measured before the volume hierarchy above the roots and the near-source vectors existed (release, 2 threads
 //! on a 2-core machine shared with other builds, so ratios only; 2026-11-30),
