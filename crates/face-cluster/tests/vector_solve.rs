@@ -747,8 +747,8 @@ fn open_book(n: usize, rho: f64) -> Scene {
 /// Traced light reaches each face where the trace's rays landed, though the solve stops above the faces.
 /// On an open book whose faces all send B = 1 (E = 1, ρ = 0.01, so B = 1 to within 1% and the traced
 /// exchange's even source holds), a face's irradiance is its mean point-to-polygon factor to the other leaf
-/// (Siegel & Howell's closed form), up to the trace's noise and ρ times the factor again (the second
-/// bounce). At ε = 0.01 the engine holds few nodes above the 512 faces; spreading their traced light evenly
+/// (Siegel & Howell's closed form), up to the trace's noise and twice ρ times the largest factor, 0.5: the
+/// second bounce, and the sources' radiosity, uneven by as much. At ε = 0.01 the engine holds few nodes above the 512 faces; spreading their traced light evenly
 /// over the faces below (what the answers did before) misses by far more, since the factor falls from 0.5 at
 /// the crease to under 0.1 at the far edges.
 #[test]
@@ -802,7 +802,7 @@ fn traced_light_reaches_each_face_where_the_trace_landed() {
     }
     let (err, even_err, noise) = (err / total, even_err / total, noise / total);
     assert!(
-        err <= 2.0 * noise + 0.5 * rho,
+        err <= 2.0 * noise + 2.0 * 0.5 * rho,
         "relative L1 {err}, the trace's noise {noise}"
     );
     assert!(even_err > 5.0 * err, "even spread {even_err} against {err}");
