@@ -496,7 +496,7 @@ impl<'a> FaceClusterSolver<'a> {
 
     /// The irradiance of engine node `i` (a cluster) moved to the centroid of input face `face` below it, its
     /// traced light handed down the tree to the face by where the trace's rays landed (spread evenly over the
-    /// faces below `i`, an open book's floor took the same light at the crease as at the far edge).
+    /// faces below `i`, an open book's faces took the same light at the crease as at the far edges).
     fn at_face(&self, i: u32, face: FaceId) -> ClampedIrradiance {
         let node = &self.engine.nodes()[i as usize];
         let mut h = self.engine.irradiance()[i as usize]
