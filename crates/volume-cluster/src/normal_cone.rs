@@ -75,13 +75,6 @@ impl NormalCone {
         Self { axis, half_angle }
     }
 
-    /// Whether every normal n of the cone has n·u ≤ −`margin` for unit `u` (0 ≤ `margin` ≤ 1): the cone's
-    /// largest n·u, cos(max(0, φ − θ)), is at most −`margin`.
-    pub fn behind(&self, u: DVec3, margin: f64) -> bool {
-        let phi = angle(self.axis, u);
-        phi - self.half_angle >= FRAC_PI_2 + margin.clamp(0.0, 1.0).asin()
-    }
-
     /// The side of unit direction `u`.
     pub fn side(&self, u: DVec3) -> Side {
         let phi = angle(self.axis, u);
