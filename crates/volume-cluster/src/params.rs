@@ -80,8 +80,9 @@ impl MethodParams for VolumeClusterParams {
     fn docs() -> Vec<(&'static str, &'static str)> {
         let mut d = vec![(
             "transfer",
-            "isotropic (A/4 clusters) | alpha (default: per-face cosines) | directional (spherical harmonics): \
-             how light crosses a link with a cluster end",
+            "isotropic (A/4 clusters) | alpha (default: per-face cosines through normal cones, exact sources) | \
+             directional (the same receiver, spherical-harmonic sources): how light crosses a link with a cluster \
+             end",
         )];
         d.push((
             "row_normalisation",
