@@ -55,7 +55,7 @@
 //! - α with the normal cones' receiver (same command, idle machine, 2026-12-01), before → after:
 //!   4.60 / 12.49 / 64.38 s → 4.91 / 12.06 / 48.31 / 176.6 s (3e4 before: 438 s on a loaded machine, above);
 //!   kernel evaluations 3.4 / 6.5 / 56 M → 3.1 / 2.2 / 7.9 / 26 M (directional's); links unchanged (4.23 M
-//!   at 1e4, 13.0 M at 3e4); held 0.91 → 0.57 GiB at 1e4, 1.84 GiB at 3e4. Fitted slope 1.07 over 1e3–3e4
+//!   at 1e4, 13.0 M at 3e4); held 907 → 567 MiB at 1e4, 1,840 MiB at 3e4. Fitted slope 1.07 over 1e3–3e4
 //!   (1.15 from 3e3 to 1e4, 1.18 from 1e4 to 3e4), within its target (≤ 1.2). On the furnace (ρ = 0.5,
 //!   B = 2) the area mean moved from +0.14 / +0.35 / +0.32% to +0.04 / +0.16 / +0.02%.
 //!
