@@ -89,6 +89,11 @@ pub struct SelfExchange {
     /// Per node C: the flux its parent's sibling's faces send onto it (rays whose deepest common node is C's
     /// grandparent).
     pub from_uncle: Vec<f64>,
+    /// Per node: how many of the trace's rays landed on its faces (the count behind [`Self::landed`]).
+    pub landed_rays: Vec<u32>,
+    /// Per node: the ratios push hands light down to it by, per [`Landing`] (mesh, sibling, outside): the
+    /// landing ratios shrunk by their noise ([`Self::shrunk_ratio`]), computed once after the trace.
+    handed: Vec<[f64; 3]>,
 }
 
 /// Which of the trace's landings hands a node's traced light down to its children.
@@ -159,6 +164,7 @@ impl SelfExchange {
         // Blocks of faces traced in parallel and summed in face order: the same sums on any number of
         // threads, and at most one block's landings held at once.
         let (mut h, mut landed) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
+        let mut landed_rays = vec![0u32; nodes.len()];
         let (mut from_sibling, mut from_uncle) = (vec![0.0; nodes.len()], vec![0.0; nodes.len()]);
         for start in (0..k).step_by(TRACE_BLOCK) {
             let block: Vec<Vec<(u32, u32, u32, f64)>> = (start..(start + TRACE_BLOCK).min(k))
@@ -168,6 +174,7 @@ impl SelfExchange {
             for &(n, to, leaf, w) in block.iter().flatten() {
                 h[n as usize] += w;
                 landed[leaf as usize] += w;
+                landed_rays[leaf as usize] += 1;
                 // The child of n the ray landed in, and that child's child on the way to the face hit.
                 let below = |m: usize| {
                     nodes[m]
@@ -192,14 +199,26 @@ impl SelfExchange {
         for i in (0..nodes.len()).rev() {
             let below: f64 = nodes[i].children().map(|c| landed[c]).sum();
             landed[i] += below;
+            let below: u32 = nodes[i].children().map(|c| landed_rays[c]).sum();
+            landed_rays[i] += below;
         }
-        Self {
+        let mut x = Self {
             onto_itself,
             between_children,
             landed,
             from_sibling,
             from_uncle,
-        }
+            landed_rays,
+            handed: Vec::new(),
+        };
+        x.handed = (0..nodes.len())
+            .map(|c| match nodes[c].parent() {
+                Some(p) => [Landing::Mesh, Landing::Sibling, Landing::Outside]
+                    .map(|which| x.shrunk_ratio(tree, which, p, c)),
+                None => [1.0; 3],
+            })
+            .collect();
+        x
     }
 
     /// Approximate heap bytes held.
@@ -210,6 +229,8 @@ impl SelfExchange {
             + self.from_sibling.len()
             + self.from_uncle.len())
             * size_of::<f64>()
+            + self.landed_rays.len() * size_of::<u32>()
+            + self.handed.len() * size_of::<[f64; 3]>()
     }
 
     /// The traced light node `parent` received, handed to its child `child` as push hands it
@@ -224,12 +245,9 @@ impl SelfExchange {
         child: usize,
         [traced, from_sibling, outside]: [Rgb; 3],
     ) -> (Rgb, Rgb) {
-        let (ap, ac) = (tree.node(parent).area, tree.node(child).area);
-        let ratio = |which| self.landing_ratio(which, parent, child, ap, ac);
-        (
-            traced * ratio(Landing::Mesh),
-            from_sibling * ratio(Landing::Sibling) + outside * ratio(Landing::Outside),
-        )
+        debug_assert_eq!(tree.node(child).parent(), Some(parent));
+        let [mesh, sibling, beyond] = self.handed.get(child).copied().unwrap_or([1.0; 3]);
+        (traced * mesh, from_sibling * sibling + outside * beyond)
     }
 
     /// The traced light `[traced, from_sibling, outside]` node `from` received, handed down the tree to its
@@ -258,6 +276,47 @@ impl SelfExchange {
             parent = child;
         }
         light[0] + light[1] + light[2]
+    }
+
+    /// [`Self::landing_ratio`] shrunk toward one by its noise: a ratio r from n landed rays has a relative
+    /// standard deviation of about 1/√n, so its departure d = r − 1 is kept with weight d²/(d² + r²/n) (the
+    /// Wiener filter's gain), and the children's shrunk ratios are rescaled so their area-weighted mean stays
+    /// one (the parent's total kept).
+    fn shrunk_ratio(
+        &self,
+        tree: &FaceClusterTree,
+        which: Landing,
+        parent: usize,
+        child: usize,
+    ) -> f64 {
+        let parent_area = tree.node(parent).area;
+        let shrunk = |c: usize| {
+            let ac = tree.node(c).area;
+            let r = self.landing_ratio(which, parent, c, parent_area, ac);
+            let n = self.landed_rays.get(c).copied().unwrap_or(0).max(1) as f64;
+            let d = r - 1.0;
+            let noise = r * r / n;
+            let gain = if d * d + noise > 0.0 {
+                d * d / (d * d + noise)
+            } else {
+                1.0
+            };
+            (1.0 + gain * d, ac)
+        };
+        let total: f64 = tree
+            .node(parent)
+            .children()
+            .map(|c| {
+                let (r, a) = shrunk(c);
+                r * a
+            })
+            .sum();
+        let (r, _) = shrunk(child);
+        if total > 0.0 {
+            r * parent_area / total
+        } else {
+            r
+        }
     }
 
     /// The share of a traced exchange delivered evenly to `parent` that its child `child` takes per unit

@@ -3,7 +3,7 @@
 //! body and keeps 1 − A_in/A_out for itself (Siegel & Howell, enclosure and reciprocity relations).
 
 use radlab_face_cluster::{FaceClusterParams, FaceClusterTree, Landing, SELF_RAYS, SelfExchange};
-use radlab_scene::{Accel, MethodParams, builtin};
+use radlab_scene::{Accel, MethodParams, Rgb, builtin};
 
 /// The concentric-spheres scene's two roots, inner (facing out) first, with their traced self-shares.
 fn concentric(threads: usize) -> (FaceClusterTree, SelfExchange) {
@@ -157,6 +157,54 @@ fn light_from_beyond_a_node_lands_on_its_children_and_is_kept() {
         checked > 100,
         "only {checked} nodes received light from beyond their parent"
     );
+}
+
+/// Inside a sphere every face receives the same share of what the sphere sends (F_ij = A_j/(4πR²); the
+/// inner sphere of the concentric pair shades every part of the outer one alike), so the true landing ratio
+/// of every child is one and what the trace's ratios depart from it is noise, about 1/√n for n rays landed.
+/// Push hands light down by ratios shrunk toward one by that noise: they keep each node's total exactly and
+/// depart from one by less than half as much as the raw ratios.
+#[test]
+fn inside_a_sphere_push_hands_light_down_evenly_despite_the_trace_s_noise() {
+    let (tree, x) = concentric(2);
+    let outer = tree
+        .roots()
+        .max_by(|&a, &b| tree.node(a).area.total_cmp(&tree.node(b).area))
+        .expect("two roots");
+    let (mut raw, mut shrunk, mut noise, mut area) = (0.0, 0.0, 0.0, 0.0);
+    let mut stack = vec![outer];
+    while let Some(p) = stack.pop() {
+        let node = tree.node(p);
+        if node.is_leaf() {
+            continue;
+        }
+        let mut kept = 0.0;
+        for c in node.children() {
+            let ac = tree.node(c).area;
+            let r = x.landing_ratio(Landing::Mesh, p, c, node.area, ac);
+            let (s, _) = x.hand_down(&tree, p, c, [Rgb::ONE, Rgb::ZERO, Rgb::ZERO]);
+            raw += ac * (r - 1.0).abs();
+            // A ratio from n rays: relative standard deviation about 1/√n, mean absolute deviation √(2/π)
+            // of that for a normal variable.
+            let n = f64::from(x.landed_rays[c].max(1));
+            noise += ac * (2.0 / std::f64::consts::PI).sqrt() / n.sqrt();
+            shrunk += ac * (s.x - 1.0).abs();
+            area += ac;
+            kept += ac * s.x;
+            stack.push(c);
+        }
+        assert!(
+            (kept - node.area).abs() <= 1e-9 * node.area,
+            "node {p}: {kept}"
+        );
+    }
+    let (raw, shrunk, noise) = (raw / area, shrunk / area, noise / area);
+    // The raw ratios depart from one by about their noise (the parent's own noise adds a little).
+    assert!(
+        raw > 0.5 * noise && raw < 2.0 * noise,
+        "raw {raw} against noise {noise}"
+    );
+    assert!(shrunk < 0.5 * raw, "shrunk {shrunk} against raw {raw}");
 }
 
 #[test]
