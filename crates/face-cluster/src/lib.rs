@@ -67,9 +67,11 @@
 //! unchanged. What is left is mostly the trace's noise and its even source: 1.13% at 10⁴ faces and ε = 1e-6
 //! with 1,024 rays a face; refining every self-exchange to the faces' kernels instead (no traced links)
 //! reaches 0.84% after 34 s, and volume clusters (directional) 0.80% after 32 s.
-//! 10⁶ faces end to end with a cold cache, this build beside the previous one alternately on the same
-//! (slower) day: terrain 37.4 / 37.1 s against 42.6 / 38.2 s, 2.49 GiB; bumpy sphere 35.3 s, 2.47 GiB; relative
-//! L1 at 10⁶ faces 3.42% (bumpy) and 2.57% (terrain) against 1,024-path references.
+//! Landing ratios shrunk by their noise (concentric spheres 10⁴ / 10⁵: 0.59 / 1.11%; before the per-face
+//! hand-down 0.73 / 1.09%, with it unshrunk 0.76 / 1.25%).
+//! 10⁶ faces end to end with a cold cache, this build beside the previous session's alternately on the same
+//! (slower) day: terrain 41.2 / 39.3 s against 39.7 / 38.9 s, 2.49 GiB peak; bumpy sphere 35.3 s, 2.47 GiB (before the shrinkage);
+//! relative L1 at 10⁶ faces 3.42% (bumpy) and 2.54% (terrain) against 1,024-path references.
 //! 10⁶ faces end to end with a cold cache (`/usr/bin/time -v radlab solve "builtin:bumpy-sphere?faces=1000000"
 //! --method face-cluster --set cache_dir=EMPTY`): bumpy sphere 29.3 s wall, 2.47 GiB peak RSS, solve 1.32 s,
 //! 2.65% relative L1 (1.77% at ε = 1e-5); terrain 31.6 s, 2.50 GiB, solve 0.29 s, 3.00% (2.63% at ε = 1e-5);
@@ -78,9 +80,11 @@
 //! 1,024-path references, evaluation between steps): bumpy sphere 0.63, 0.89, 1.22, 1.73 s (slope 0.14),
 //! terrain 0.07, 0.11, 0.58, 0.46 s (0.32, above the 0.3 target; with `radlab solve` alone, no evaluation
 //! between steps, 0.065, 0.105, 0.49, 0.28 s, slope 0.26), concentric spheres 0.65, 1.11, 2.31, 2.47 s
-//! (0.20); memory slopes 0.55, 0.75, 0.55. Again after this session's changes (2026-12-01): bumpy sphere 0.70,
-//! 1.00, 1.18, 1.96 s (0.14), terrain 0.08, 0.12, 0.66, 0.54 s (0.32), concentric spheres 0.70, 1.22, 2.26,
-//! 2.63 s (0.20). The terrain's links go 15k, 17k, 58k, 25k: its fractal has 8 octaves, the finest 256 cells
+//! (0.20); memory slopes 0.55, 0.75, 0.55. Again with the traced light's own channel, its hand-down to the
+//! faces and the shrunk ratios (2026-12-01): bumpy sphere 0.62, 0.88, 1.19, 1.82 s (0.15), terrain 0.069,
+//! 0.10, 0.61, 0.51 s (0.34; 0.32 in a run before the shrinkage, the small sizes' times moving by 20%),
+//! concentric spheres 0.67, 1.16, 2.12, 2.48 s (0.20); relative L1 3.4% (bumpy, all sizes), 1.6, 1.7, 2.3,
+//! 2.5% (terrain), 1.2, 0.59, 1.1, 0.95% (concentric spheres). The terrain's links go 15k, 17k, 58k, 25k: its fractal has 8 octaves, the finest 256 cells
 //! across, which 10⁴ faces (100 across) do not resolve and 10⁵ (316) do, so the scene itself gains detail up
 //! to 10⁵ faces; with `octaves=4` (resolved at every k) the slope is 0.28 (0.086, 0.092, 0.29, 0.51 s; links
 //! 15k, 16k, 30k, 31k; why they double from 10⁴ to 10⁵ there is not established: neither the traced
