@@ -236,49 +236,51 @@ impl SelfExchange {
             + self.handed.len() * size_of::<[f64; 3]>()
     }
 
-    /// The traced light node `parent` received, handed to its child `child` as push hands it
-    /// ([`Self::landing_ratio`]): its own and its ancestors' self-exchange (`traced`) by where the mesh's rays
-    /// landed, what its sibling sent (`from_sibling`) by where the sibling's rays landed, and what its
-    /// ancestors' siblings sent (`outside`) by where the rays from beyond `parent`'s parent landed. Returns the
-    /// child's `(traced, outside)`: what the sibling sent the parent comes from beyond the child's parent too.
-    pub fn hand_down(
-        &self,
-        tree: &FaceClusterTree,
-        parent: usize,
-        child: usize,
-        [traced, from_sibling, outside]: [Rgb; 3],
-    ) -> (Rgb, Rgb) {
-        debug_assert_eq!(tree.node(child).parent(), Some(parent));
-        let [mesh, sibling, beyond] = self.handed.get(child).copied().unwrap_or([1.0; 3]);
+    /// The traced light a node received, handed to its child `child` as push hands it (the ratios of
+    /// [`Self::landing_ratio`], shrunk by their noise): its own and its ancestors' self-exchange (`traced`) by
+    /// where the mesh's rays landed, what its sibling sent (`from_sibling`) by where the sibling's rays landed,
+    /// and what its ancestors' siblings sent (`outside`) by where the rays from beyond its parent landed.
+    /// Returns the child's `(traced, outside)`: what the sibling sent the parent comes from beyond the child's
+    /// parent too.
+    pub fn hand_down(&self, child: usize, [traced, from_sibling, outside]: [Rgb; 3]) -> (Rgb, Rgb) {
+        let [mesh, sibling, beyond] = self.handed(child);
         (traced * mesh, from_sibling * sibling + outside * beyond)
     }
 
     /// The traced light `[traced, from_sibling, outside]` node `from` received, handed down the tree to its
     /// descendant `to` by the path's [`Self::hand_down`] steps, in all: where the solve stopped above the
     /// faces, each face below still takes its share by where the trace's rays landed, not the node's mean.
+    /// The steps' ratios multiply, so the path is walked upward: the self-exchange takes every step's mesh
+    /// ratio, the sibling's light the first step's sibling ratio, the rest every later step's outside ratio.
     pub fn hand_down_to(
         &self,
         tree: &FaceClusterTree,
         from: usize,
         to: usize,
-        light: [Rgb; 3],
+        [traced, from_sibling, outside]: [Rgb; 3],
     ) -> Rgb {
-        let mut path = Vec::new();
+        let (mut mesh, mut beyond_below_first, mut first) = (1.0, 1.0, [1.0; 3]);
         let mut n = to;
         while n != from {
-            path.push(n);
-            match tree.node(n).parent() {
-                Some(p) => n = p,
-                None => return light[0] + light[1] + light[2], // `to` is not below `from`
+            let Some(p) = tree.node(n).parent() else {
+                return traced + from_sibling + outside; // `to` is not below `from`
+            };
+            let r = self.handed(n);
+            mesh *= r[0];
+            if p == from {
+                first = r;
+            } else {
+                beyond_below_first *= r[2];
             }
+            n = p;
         }
-        let (mut parent, mut light) = (from, light);
-        for &child in path.iter().rev() {
-            let (t, o) = self.hand_down(tree, parent, child, light);
-            light = [t, Rgb::ZERO, o];
-            parent = child;
-        }
-        light[0] + light[1] + light[2]
+        traced * mesh + (from_sibling * first[1] + outside * first[2]) * beyond_below_first
+    }
+
+    /// The ratios (mesh, sibling, outside) by which light reaches `child` from its parent; one where nothing
+    /// was traced.
+    fn handed(&self, child: usize) -> [f64; 3] {
+        self.handed.get(child).copied().unwrap_or([1.0; 3])
     }
 
     /// [`Self::landing_ratio`] shrunk toward one by its noise: a ratio r from n landed rays has a relative

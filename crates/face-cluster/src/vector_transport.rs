@@ -718,9 +718,8 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         // their view the parts' mesh fills, what siblings sent by where light from beyond landed.
         let mut down = h.moved(child.centroid() - parent.centroid());
         if let (FaceNode::Cluster(p), FaceNode::Cluster(c)) = (parent, child) {
+            debug_assert_eq!(c.node().parent(), Some(p.id as usize));
             (down.traced, down.outside) = p.ctx.exchange.hand_down(
-                &p.ctx.tree,
-                p.id as usize,
                 c.id as usize,
                 [down.traced, down.from_sibling, down.outside],
             );

@@ -18,6 +18,16 @@ fn concentric(threads: usize) -> (FaceClusterTree, SelfExchange) {
     (tree, x)
 }
 
+/// Σ_C A_C ratio_C over the children of node `p`: the area its traced light covers once pushed down by
+/// `which` landing ratio (A_P when the total is kept).
+fn kept_by(tree: &FaceClusterTree, x: &SelfExchange, which: Landing, p: usize) -> f64 {
+    let a = tree.node(p).area;
+    tree.node(p)
+        .children()
+        .map(|c| tree.node(c).area * x.landing_ratio(which, p, c, a, tree.node(c).area))
+        .sum()
+}
+
 #[test]
 fn an_enclosure_keeps_what_the_body_inside_does_not_take() {
     let (tree, x) = concentric(2);
@@ -66,13 +76,7 @@ fn landings_add_up_and_pushing_by_them_keeps_the_total() {
         if node.is_leaf() || x.landed[p] <= 0.0 {
             continue;
         }
-        let kept: f64 = node
-            .children()
-            .map(|c| {
-                tree.node(c).area
-                    * x.landing_ratio(Landing::Mesh, p, c, node.area, tree.node(c).area)
-            })
-            .sum();
+        let kept = kept_by(&tree, &x, Landing::Mesh, p);
         assert!(
             (kept - node.area).abs() <= 1e-9 * node.area,
             "node {p}: {kept} vs {}",
@@ -100,12 +104,7 @@ fn a_sibling_s_light_lands_on_the_children_and_is_kept() {
         let landed: f64 = node.children().map(|c| x.from_uncle[c]).sum();
         let (s, a) = (x.from_sibling[p], node.area);
         assert!((landed - s).abs() <= 1e-9 * s, "node {p}: {landed} vs {s}");
-        let kept: f64 = node
-            .children()
-            .map(|c| {
-                tree.node(c).area * x.landing_ratio(Landing::Sibling, p, c, a, tree.node(c).area)
-            })
-            .sum();
+        let kept = kept_by(&tree, &x, Landing::Sibling, p);
         assert!((kept - a).abs() <= 1e-9 * a, "node {p}: {kept} vs {a}");
         checked += 1;
     }
@@ -144,12 +143,7 @@ fn light_from_beyond_a_node_lands_on_its_children_and_is_kept() {
             "node {p}: {landed} vs {from_beyond}"
         );
         let a = node.area;
-        let kept: f64 = node
-            .children()
-            .map(|c| {
-                tree.node(c).area * x.landing_ratio(Landing::Outside, p, c, a, tree.node(c).area)
-            })
-            .sum();
+        let kept = kept_by(&tree, &x, Landing::Outside, p);
         assert!((kept - a).abs() <= 1e-6 * a, "node {p}: {kept} vs {a}");
         checked += 1;
     }
@@ -182,7 +176,7 @@ fn inside_a_sphere_push_hands_light_down_evenly_despite_the_trace_s_noise() {
         for c in node.children() {
             let ac = tree.node(c).area;
             let r = x.landing_ratio(Landing::Mesh, p, c, node.area, ac);
-            let (s, _) = x.hand_down(&tree, p, c, [Rgb::ONE, Rgb::ZERO, Rgb::ZERO]);
+            let (s, _) = x.hand_down(c, [Rgb::ONE, Rgb::ZERO, Rgb::ZERO]);
             raw += ac * (r - 1.0).abs();
             // A ratio from n rays: relative standard deviation about 1/√n, mean absolute deviation √(2/π)
             // of that for a normal variable.

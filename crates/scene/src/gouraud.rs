@@ -100,24 +100,13 @@ impl GouraudField {
 /// triangle): bilinear over a quad, linear over a triangle; a point slightly outside is clamped to the
 /// polygon.
 pub fn interpolate_corners(poly: &Polygon, corners: &[Rgb; 4], point: DVec3) -> Rgb {
-    let n = if poly.is_triangle() { 3 } else { 4 };
-    corner_weights(poly, point)
-        .iter()
-        .zip(corners)
-        .take(n)
-        .fold(Rgb::ZERO, |sum, (&w, &c)| sum + w * c)
-}
-
-/// The weights of vertex k of `poly` in the value at `point` of a field interpolated from its corners (zero
-/// for a triangle's fourth): (1 − s − t, s, t) over a triangle, the bilinear weights over a quad, summing
-/// to one; a point slightly outside is clamped to the polygon. For fields other than one colour per corner.
-pub fn corner_weights(poly: &Polygon, point: DVec3) -> [f64; 4] {
     let (s, t) = parameters(poly, point);
+    let c = corners;
     if poly.is_triangle() {
         // point_at's triangle map is a + s(b − a) + t(c − a) on the fold s + t ≤ 1.
-        [1.0 - s - t, s, t, 0.0]
+        (1.0 - s - t) * c[0] + s * c[1] + t * c[2]
     } else {
-        [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t]
+        (1.0 - s) * (1.0 - t) * c[0] + s * (1.0 - t) * c[1] + s * t * c[2] + (1.0 - s) * t * c[3]
     }
 }
 
