@@ -91,22 +91,53 @@ fn layout_is_contiguous_and_nested() {
     }
 }
 
-/// Greedy contraction is not balanced by construction, but regions growing in step keep the tree within a
-/// small factor of a balanced tree's log₂ k; a region taking in its neighbours one face at a time (the
-/// failure the balance and planarity normalisation prevent) makes it grow like √k or k instead.
+/// Greedy contraction is not balanced by construction, but regions growing in step keep the depth growing
+/// like log k; a region taking in its neighbours one face at a time (the failure the balance and planarity
+/// normalisation prevent) makes it grow like √k or k instead. From 10³ to 3.2·10⁴ faces log₂ k grows 1.5-fold
+/// and √k 5.7-fold; the depth must grow by less than their geometric mean, 2.9 (measured: bumpy sphere 14 → 33,
+/// terrain 34 → 62, concentric spheres 12 → 21). At a few thousand faces an absolute bound cannot tell the
+/// two apart (4 log₂ k and √k are both about 44 at 2,000 faces).
 #[test]
 fn trees_stay_shallow() {
-    for scene in [bumpy(), terrain()] {
-        let t = build(&scene);
-        let log2k = (scene.face_count() as f64).log2();
+    for family in ["bumpy-sphere", "terrain", "concentric-spheres"] {
+        let depth = |k: usize| {
+            let scene = builtin(&format!("{family}?faces={k}")).expect("builtin");
+            let d = build(&scene).depth() as f64;
+            (d, scene.face_count() as f64)
+        };
+        let ((d0, k0), (d1, k1)) = (depth(1_000), depth(32_000));
+        let (log_growth, sqrt_growth) = (k1.log2() / k0.log2(), (k1 / k0).sqrt());
         assert!(
-            (t.depth() as f64) <= 4.0 * log2k,
-            "{}: depth {} for {} faces",
-            scene.name,
-            t.depth(),
-            scene.face_count()
+            d1 / d0 < (log_growth * sqrt_growth).sqrt(),
+            "{family}: depth {d0} at {k0} faces, {d1} at {k1}: {:.2}-fold, against {log_growth:.2} for log k \
+             and {sqrt_growth:.2} for √k",
+            d1 / d0
         );
     }
+}
+
+/// Known failure, kept to be fixed: on a gently rolling surface (the terrain at a tenth of its relief) the
+/// contraction degenerates as [`trees_stay_shallow`] describes: depth 41 at 10³ faces and 285 at 3.2·10⁴,
+/// 6.9-fold where √k gives 5.7. Every merge's planarity is measured against the merged region's absolute fit,
+/// which on a gentle curve grows with the region until merging two regions costs more than a region taking
+/// in one more face (neither scaling the balance term by the fit nor clamping or re-basing the shape term
+/// helped: measured 2026-12-01).
+#[test]
+#[ignore = "known failure: the contraction degenerates on gently rolling terrain (depth 285 at 3.2e4 faces)"]
+fn trees_stay_shallow_on_gentle_terrain() {
+    let depth = |k: usize| {
+        let scene = builtin(&format!("terrain?faces={k}&octaves=4&relief=0.1")).expect("builtin");
+        build(&scene).depth() as f64
+    };
+    let (d0, d1) = (depth(1_000), depth(32_000));
+    let (log_growth, sqrt_growth) = (
+        32_005f64.log2() / 1_013f64.log2(),
+        (32_005f64 / 1_013.0).sqrt(),
+    );
+    assert!(
+        d1 / d0 < (log_growth * sqrt_growth).sqrt(),
+        "depth {d0} → {d1}"
+    );
 }
 
 /// Σ (E_i + ρ_i n_i·e) A_i n_i over a node's faces equals p_E + M e when every n_i·e ≥ 0 (Willmott et al.

@@ -142,11 +142,75 @@ fn tiny_experiment_end_to_end_then_skips() {
         "{}",
         text(&o)
     );
+    // A narrower configuration written to the same directory: the tables hold its runs only, not the files
+    // the wider one left there (both conjugate-gradient runs, and Cornell's Jacobi run, whose index moved from
+    // 2 to 1 and so runs again).
+    let narrow = write_config(
+        tmp.path(),
+        "narrow.toml",
+        &TINY.replace(r#"["jacobi", "conjugate-gradient"]"#, r#"["jacobi"]"#),
+    );
+    let o = run_ok(tmp.path(), &narrow, &out);
+    assert!(
+        text(&o).contains("1 runs executed, 1 skipped")
+            && text(&o).contains("3 run files in runs/ belong to no run"),
+        "{}",
+        text(&o)
+    );
+    let runs = csv_rows(&out.join("runs.csv"));
+    assert_eq!(runs.len(), 2, "2 scenes x 1 sweep point");
+    assert!(
+        runs.iter()
+            .all(|r| r.iter().all(|f| !f.contains("conjugate-gradient"))),
+        "{runs:?}"
+    );
     // plot redraws from the CSVs.
     std::fs::remove_file(out.join("figures/frontier-cornell.png")).expect("rm");
     let o = radlab(tmp.path(), &["plot", out.to_str().expect("utf8")], &[]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(out.join("figures/frontier-cornell.png").exists());
+}
+
+/// A run is skipped only while its scene is the same: a scene file edited under the same name runs again.
+#[test]
+fn an_edited_scene_file_runs_again() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let box_scene = |rho: f64| {
+        format!(
+            "[materials.furnace]\nreflectance = {rho}\nemission = 1\n\n[[objects]]\ntype = \"box\"\n\
+             min = [0, 0, 0]\nmax = [1, 2, 3]\ninward = true\nmaterial = \"furnace\"\n"
+        )
+    };
+    std::fs::write(tmp.path().join("box.toml"), box_scene(0.5)).expect("scene");
+    let cfg = write_config(
+        tmp.path(),
+        "edit.toml",
+        r#"
+name = "edit"
+description = "one scene file, one run"
+[evaluation]
+points = 16
+[reference]
+samples = 16
+[outputs]
+images = false
+plots = false
+[[scenes]]
+scene = "box.toml"
+[[methods]]
+method = "matrix"
+"#,
+    );
+    let out = tmp.path().join("out");
+    for (rho, expect) in [
+        (0.5, "1 runs executed, 0 skipped"),
+        (0.5, "0 runs executed, 1 skipped"),
+        (0.6, "1 runs executed, 0 skipped"),
+    ] {
+        std::fs::write(tmp.path().join("box.toml"), box_scene(rho)).expect("scene");
+        let o = run_ok(tmp.path(), &cfg, &out);
+        assert!(text(&o).contains(expect), "ρ = {rho}: {}", text(&o));
+    }
 }
 
 #[test]

@@ -73,14 +73,17 @@ fn references_dir(out: &Path) -> PathBuf {
         .map_or_else(|| PathBuf::from("references"), |p| p.join("references"))
 }
 
-/// Digest of everything that determines a run's result.
+/// Digest of everything that determines a run's result, the scene's content (`scene_digest`) included: a
+/// builtin or a mesh file that changes under the same name is run again.
 pub fn job_digest(
     cfg: &ExperimentConfig,
     spec: &RunSpec,
     reference_kind: config::ReferenceKind,
+    scene_digest: &str,
 ) -> String {
     let key = serde_json::json!({
         "spec": spec,
+        "scene": scene_digest,
         "evaluation": cfg.evaluation,
         "reference": cfg.reference,
         "reference_kind": reference_kind,
@@ -195,10 +198,11 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
                     .with_context(|| format!("cannot copy {}", cached.display()))
             })?;
         }
+        let scene_digest = digest::scene(&scene);
         for spec in mine {
             jobs.push(Job {
                 spec: spec.clone(),
-                digest: job_digest(&cfg, spec, r.kind),
+                digest: job_digest(&cfg, spec, r.kind, &scene_digest),
                 dir: out.clone(),
                 faces: scene.faces.len() as u64,
                 reference_file: r.file.clone(),
@@ -268,9 +272,22 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
     Ok(())
 }
 
-/// Rebuilds tables, figures, difference images, contact sheets and the report from the per-run files.
+/// Rebuilds tables, figures, difference images, contact sheets and the report from the per-run files of
+/// `cfg`'s runs (all shards'). Files in `runs/` that no run of `cfg` writes (left by an earlier configuration
+/// written to the same directory) are left in place but kept out of the tables, and counted on stderr.
 pub fn finish(out: &Path, cfg: &ExperimentConfig) -> Result<()> {
-    let results = tables::collect_results(out)?;
+    let ids: std::collections::HashSet<String> = cfg.runs()?.iter().map(RunSpec::id).collect();
+    let (results, stale): (Vec<_>, Vec<_>) = tables::collect_results(out)?
+        .into_iter()
+        .partition(|r| ids.contains(&r.id));
+    if !stale.is_empty() {
+        eprintln!(
+            "{}: {} run files in runs/ belong to no run of this experiment (an earlier configuration?); \
+             left out of the tables and report",
+            out.display(),
+            stale.len()
+        );
+    }
     tables::write_tables(out, &results)?;
     redraw(out, &cfg.name, &cfg.description, cfg.outputs.plots)
 }

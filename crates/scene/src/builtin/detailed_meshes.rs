@@ -62,7 +62,11 @@ pub(super) fn infos() -> Vec<BuiltinInfo> {
                     "0.5",
                     "amplitude ratio between octaves, [0, 1]",
                 ),
-                ("octaves", "8", "noise octaves, 1..16"),
+                (
+                    "octaves",
+                    "8",
+                    "noise octaves, 1..16 (at most log2 of the grid's cells per side)",
+                ),
                 ("seed", "1", "seed of the noise"),
                 ("reflectance", "0.5", "terrain's rho, grey or r,g,b"),
                 ("emission", "10", "light's E (W/m^2), grey or r,g,b"),

@@ -17,7 +17,8 @@
 //! - **Fractal heights**: fractional Brownian motion from value noise: Σ_o g^o · noise(2^o · base · x), each
 //!   octave's lattice of uniform values in [−1, 1] drawn from `sampling::rng(seed, octave)` and interpolated
 //!   with the C¹ smoothstep (Musgrave's fBm, in Ebert et al., "Texturing and Modeling", ch. 16). Cost
-//!   O(vertices × octaves), octaves capped by the grid resolution.
+//!   O(vertices × octaves), octaves capped so the finest lattice (2^octaves cells per side) is no finer than
+//!   the grid.
 
 use std::collections::HashMap;
 
@@ -390,7 +391,9 @@ pub(crate) struct Fractal {
 /// Heights of an (n_x + 1) × (n_z + 1) grid over the unit square (row-major, row index along z).
 pub(crate) fn fractal_heights(nx: usize, nz: usize, f: &Fractal) -> Vec<f64> {
     let n = nx.max(nz).max(1);
-    let max_octaves = (usize::BITS - n.leading_zeros()) as usize; // ⌊log2 n⌋ + 1
+    // The finest lattice, 2^octaves cells per side, no finer than the grid's n cells: finer octaves would be
+    // sampled below their lattice spacing and alias into face-to-face jitter.
+    let max_octaves = n.ilog2() as usize;
     let octaves = f.octaves.clamp(1, max_octaves.max(1));
     let mut h = vec![0.0; (nx + 1) * (nz + 1)];
     let smooth = |t: f64| t * t * (3.0 - 2.0 * t);
@@ -482,5 +485,25 @@ mod tests {
         assert_eq!(a, fractal_heights(16, 16, &f));
         assert_ne!(a, fractal_heights(16, 16, &Fractal { seed: 4, ..f }));
         assert!(a.iter().all(|h| h.abs() <= 2.0));
+    }
+
+    #[test]
+    fn fractal_octaves_stop_where_the_lattice_would_be_finer_than_the_grid() {
+        let f = |octaves, n| {
+            let f = Fractal {
+                amplitude: 1.0,
+                roughness: 0.5,
+                octaves,
+                seed: 3,
+            };
+            fractal_heights(n, n, &f)
+        };
+        // 22 cells: the 16-cell lattice (4 octaves) is the finest the grid resolves.
+        assert_ne!(f(3, 22), f(4, 22));
+        assert_eq!(f(4, 22), f(5, 22));
+        assert_eq!(f(4, 22), f(16, 22));
+        // 32 cells resolve the 32-cell lattice.
+        assert_ne!(f(4, 32), f(5, 32));
+        assert_eq!(f(5, 32), f(6, 32));
     }
 }
