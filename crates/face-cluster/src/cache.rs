@@ -21,7 +21,7 @@ pub const CACHE_MAGIC: &[u8; 8] = b"RLFCTREE";
 
 /// Version of the cache format and of the build algorithm: part of the digest, so a change to either
 /// invalidates old caches.
-pub const CACHE_VERSION: u32 = 1;
+pub const CACHE_VERSION: u32 = 2;
 
 const HEADER_LEN: usize = 8 + 4 + 32;
 
