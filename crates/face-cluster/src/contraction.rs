@@ -314,8 +314,8 @@ pub(crate) fn contract(scene: &Scene, params: &FaceClusterParams) -> Contraction
                 continue;
             }
             let mut stranded = true;
-            for i in 0..adj[x as usize].len() {
-                let y = find(&mut rep, adj[x as usize][i].0);
+            for &(y, _) in &adj[x as usize] {
+                let y = find(&mut rep, y);
                 if y != w && regions[y as usize].area < STRANDED * ax {
                     stranded = false;
                     break;
