@@ -390,11 +390,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let budget = self.budget_bytes();
         if need > budget {
             return Err(SolveError::over_budget(
-                "hierarchical radiosity's elements and links",
+                "the hierarchy's elements and links",
                 need,
                 budget,
                 "raise memory_budget_mib, or raise epsilon or min_element_size (or use fewer input faces: \
-                 the initial links grow as k²)",
+                 plain hierarchical radiosity's initial links grow as k², clusters' links about as k)",
             ));
         }
         if self.nodes.len() + extra_nodes >= NONE as usize {

@@ -237,6 +237,18 @@ fn bad_scene_method_and_parameters_are_clear_errors() {
             ],
             "MiB",
         ),
+        (
+            // The hierarchical engine's refusal names no one method: volume clusters run on it too.
+            vec![
+                "solve",
+                "builtin:concentric-spheres?faces=2000",
+                "--method",
+                "volume-cluster",
+                "--set",
+                "memory_budget_mib=0.01",
+            ],
+            "the hierarchy's elements and links needs",
+        ),
     ] {
         let o = radlab(tmp.path(), &args);
         assert!(!o.status.success(), "{args:?} succeeded");
