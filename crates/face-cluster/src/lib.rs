@@ -89,7 +89,12 @@
 //! to 10⁵ faces; with `octaves=4` (resolved at every k) the slope is 0.28 (0.086, 0.092, 0.29, 0.51 s; links
 //! 15k, 16k, 30k, 31k; why they double from 10⁴ to 10⁵ there is not established: neither the traced
 //! exchange's 32-face threshold (256 gives the same 30,013 links at 10⁵) nor `min_element_size` (0.14, 0.3:
-//! unchanged) moves them).
+//! unchanged) moves them). Both were found later the same day: the terrain's finest octave was finer than its
+//! grid (aliased; octaves now stop at the grid, 4 / 6 / 7 / 8 at 10³ … 10⁶), and the links doubled because
+//! stranded pairs and quads were taken into the last regions one at a time, a tree level each, which
+//! refinement walked down (104 levels at 10⁵ faces; merged when stranded, 34). With both: solve 0.069, 0.066,
+//! 0.14, 0.22 s (slope 0.18; links 15.8k, 15.2k, 19.1k, 16.1k), the 4-octave terrain 0.19, bumpy sphere 0.14,
+//! concentric spheres 0.19 (`experiments/scaling-face-cluster.toml`).
 //!
 //! Measured before the volume hierarchy above the roots and the near-source vectors existed (release, 2 threads
 //! on a 2-core machine shared with other builds, so ratios only; 2026-11-30),

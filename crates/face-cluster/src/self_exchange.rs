@@ -95,7 +95,7 @@ pub struct SelfExchange {
     /// Per node: how many of the trace's rays landed on its faces (the count behind [`Self::landed`]).
     pub landed_rays: Vec<u32>,
     /// Per node: the ratios push hands light down to it by, per [`Landing`] (mesh, sibling, outside): the
-    /// landing ratios shrunk by their noise ([`Self::shrunk_ratio`]), computed once after the trace.
+    /// landing ratios shrunk by their noise ([`Self::shrunk_ratios`]), computed once after the trace.
     handed: Vec<[f64; 3]>,
 }
 
@@ -214,13 +214,18 @@ impl SelfExchange {
             landed_rays,
             handed: Vec::new(),
         };
-        x.handed = (0..nodes.len())
-            .map(|c| match nodes[c].parent() {
-                Some(p) => [Landing::Mesh, Landing::Sibling, Landing::Outside]
-                    .map(|which| x.shrunk_ratio(tree, which, p, c)),
-                None => [1.0; 3],
-            })
-            .collect();
+        let mut handed = vec![[1.0; 3]; nodes.len()];
+        for p in 0..nodes.len() {
+            for (slot, which) in [Landing::Mesh, Landing::Sibling, Landing::Outside]
+                .into_iter()
+                .enumerate()
+            {
+                for (c, r) in x.shrunk_ratios(tree, which, p) {
+                    handed[c][slot] = r;
+                }
+            }
+        }
+        x.handed = handed;
         x
     }
 
@@ -283,45 +288,48 @@ impl SelfExchange {
         self.handed.get(child).copied().unwrap_or([1.0; 3])
     }
 
-    /// [`Self::landing_ratio`] shrunk toward one by its noise: a ratio r from n landed rays has a relative
-    /// standard deviation of about 1/√n, so its departure d = r − 1 is kept with weight d²/(d² + r²/n) (the
-    /// Wiener filter's gain), and the children's shrunk ratios are rescaled so their area-weighted mean stays
-    /// one (the parent's total kept).
-    fn shrunk_ratio(
+    /// [`Self::landing_ratio`] of each child of `parent`, shrunk toward one by its noise: a ratio r from n
+    /// landed rays has a relative standard deviation of about 1/√n, so its departure d = r − 1 is kept with
+    /// weight d²/(d² + r²/n) (the Wiener filter's gain), and the children's shrunk ratios are rescaled so their
+    /// area-weighted mean stays one (the parent's total kept). Pairs (child, ratio); none for a leaf.
+    fn shrunk_ratios(
         &self,
         tree: &FaceClusterTree,
         which: Landing,
         parent: usize,
-        child: usize,
-    ) -> f64 {
+    ) -> Vec<(usize, f64)> {
         let parent_area = tree.node(parent).area;
-        let shrunk = |c: usize| {
-            let ac = tree.node(c).area;
-            let r = self.landing_ratio(which, parent, c, parent_area, ac);
-            let n = self.landed_rays.get(c).copied().unwrap_or(0).max(1) as f64;
-            let d = r - 1.0;
-            let noise = r * r / n;
-            let gain = if d * d + noise > 0.0 {
-                d * d / (d * d + noise)
-            } else {
-                1.0
-            };
-            (1.0 + gain * d, ac)
-        };
-        let total: f64 = tree
+        let shrunk: Vec<(usize, f64, f64)> = tree
             .node(parent)
             .children()
             .map(|c| {
-                let (r, a) = shrunk(c);
-                r * a
+                let ac = tree.node(c).area;
+                let r = self.landing_ratio(which, parent, c, parent_area, ac);
+                let n = self.landed_rays.get(c).copied().unwrap_or(0).max(1) as f64;
+                let d = r - 1.0;
+                let noise = r * r / n;
+                let gain = if d * d + noise > 0.0 {
+                    d * d / (d * d + noise)
+                } else {
+                    1.0
+                };
+                (c, 1.0 + gain * d, ac)
             })
-            .sum();
-        let (r, _) = shrunk(child);
-        if total > 0.0 {
-            r * parent_area / total
-        } else {
-            r
-        }
+            .collect();
+        let total: f64 = shrunk.iter().map(|&(_, r, a)| r * a).sum();
+        shrunk
+            .into_iter()
+            .map(|(c, r, _)| {
+                (
+                    c,
+                    if total > 0.0 {
+                        r * parent_area / total
+                    } else {
+                        r
+                    },
+                )
+            })
+            .collect()
     }
 
     /// The share of a traced exchange delivered evenly to `parent` that its child `child` takes per unit

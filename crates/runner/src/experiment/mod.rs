@@ -128,6 +128,7 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
         }
         let scene = crate::scene_spec::load_and_warn(&entry.scene)
             .with_context(|| format!("scene '{label}'"))?;
+        let scene_digest = digest::scene(&scene);
         let accel = Accel::new(&scene);
         let points =
             radlab_scene::evaluation_points(&scene, cfg.evaluation.points, cfg.evaluation.seed);
@@ -138,6 +139,7 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
         let bar = progress::bar(points.len() as u64, &format!("reference {label}"));
         let r = reference::reference(
             &scene,
+            &scene_digest,
             &accel,
             &points,
             &cfg.reference,
@@ -164,10 +166,7 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
                 &digest::hex(
                     format!(
                         "{}|{:?}|{}|{}",
-                        digest::scene(&scene),
-                        camera,
-                        cfg.reference.image_spp,
-                        cfg.reference.seed
+                        scene_digest, camera, cfg.reference.image_spp, cfg.reference.seed
                     )
                     .as_bytes()
                 )[..16]
@@ -198,7 +197,6 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
                     .with_context(|| format!("cannot copy {}", cached.display()))
             })?;
         }
-        let scene_digest = digest::scene(&scene);
         for spec in mine {
             jobs.push(Job {
                 spec: spec.clone(),

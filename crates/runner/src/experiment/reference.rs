@@ -95,13 +95,14 @@ fn direct(scene: &Scene, accel: &Accel, points: &[EvalPoint], seed: u64) -> Vec<
 fn cache_path(
     dir: &Path,
     scene: &Scene,
+    scene_digest: &str,
     points: &[EvalPoint],
     cfg: &ReferenceConfig,
     kind: ReferenceKind,
 ) -> PathBuf {
     let mut key = format!(
         "{}|{}|{:?}|{}|{}|",
-        digest::scene(scene),
+        scene_digest,
         points.len(),
         kind,
         cfg.samples,
@@ -117,9 +118,12 @@ fn cache_path(
     ))
 }
 
-/// Computes (or reads from the cache) the reference at `points`.
+/// Computes (or reads from the cache) the reference at `points`; `scene_digest` is [`digest::scene`] of
+/// `scene`, computed once by the caller (it hashes every vertex), which also keys its runs and images by it.
+#[allow(clippy::too_many_arguments)]
 pub fn reference(
     scene: &Scene,
+    scene_digest: &str,
     accel: &Accel,
     points: &[EvalPoint],
     cfg: &ReferenceConfig,
@@ -128,7 +132,7 @@ pub fn reference(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Reference> {
     let kind = resolve(kind, scene);
-    let path = cache_path(cache_dir, scene, points, cfg, kind);
+    let path = cache_path(cache_dir, scene, scene_digest, points, cfg, kind);
     if let Ok(r) = read_cache(&path, points.len()) {
         return Ok(Reference {
             kind,
