@@ -107,7 +107,8 @@ pub fn methods() -> Vec<MethodInfo> {
             summary: "Face cluster radiosity (Willmott, Heckbert & Garland 1999): face-cluster hierarchies from \
                  dual-graph contraction (cached per mesh digest in cache_dir), irradiance and power vectors per \
                  node, a volume octree above the hierarchies' roots, one self-link refined by the hierarchical \
-                 oracles; gather, push and pull never read an input face. For detailed meshes.",
+                 oracles; gather, push and pull never read an input face; answers Gouraud-interpolated by default, \
+                 or a final gather over the tree (reconstruction = final-gather). For detailed meshes.",
             params: param_lines::<radlab_face_cluster::FaceClusterSolveParams>,
             build: |scene, accel, table, seed, _points| {
                 crate::face_cache::build_solver(scene, accel, table, seed)

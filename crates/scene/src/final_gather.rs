@@ -101,12 +101,61 @@ impl GatherSettings {
             seed,
         }
     }
+
+    /// The visible share V_xj of source element `src` from `point` on `face`: `direct` rays toward an emitting
+    /// source (`emits`) or one whose radiosity is that of its open part, `indirect` rays toward the others;
+    /// jittered points come from the query's stream `key` and the source's `stream`. Rays are added to `rays`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn visible_share(
+        &self,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        key: u64,
+        stream: u64,
+        src: &ElementValue,
+        emits: bool,
+        rays: &mut u64,
+    ) -> f64 {
+        let how = if emits || src.open < 1.0 {
+            self.direct
+        } else {
+            self.indirect
+        };
+        match how {
+            VisibilitySampling::Unoccluded => 1.0,
+            VisibilitySampling::Centre => {
+                *rays += 1;
+                if accel.visible_between(point, face, src.polygon.centroid(), src.face) {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            _ => {
+                let total = how.rays();
+                let side = (total as f64).sqrt().round() as u32;
+                let mut r = sampling::rng(self.seed, key ^ mix64(stream));
+                let mut seen = 0u32;
+                for k in 0..total {
+                    let u = (((k % side) as f64) + sampling::uniform(&mut r)) / side as f64;
+                    let w = (((k / side) as f64) + sampling::uniform(&mut r)) / side as f64;
+                    let y = src.polygon.point_at(u, w);
+                    if accel.visible_between(point, face, y, src.face) {
+                        seen += 1;
+                    }
+                }
+                *rays += total as u64;
+                seen as f64 / total as f64
+            }
+        }
+    }
 }
 
 /// The random stream of a query: a hash of the face and of the point's coordinates along two of the face's
 /// edges in units of those edges, quantised to 2^-30, so the stream (and the answer) does not change when the
 /// scene is scaled.
-fn query_key(scene: &Scene, face: FaceId, point: DVec3) -> u64 {
+pub fn query_key(scene: &Scene, face: FaceId, point: DVec3) -> u64 {
     let poly = scene.polygon(face);
     let v = poly.vertices();
     let d = point - v[0];
@@ -332,38 +381,9 @@ impl FinalGather {
                 }
                 continue;
             }
-            let how = if *emits || src.open < 1.0 {
-                self.settings.direct
-            } else {
-                self.settings.indirect
-            };
-            let v = match how {
-                VisibilitySampling::Unoccluded => 1.0,
-                VisibilitySampling::Centre => {
-                    *rays += 1;
-                    if accel.visible_between(point, face, src.polygon.centroid(), src.face) {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                }
-                _ => {
-                    let total = how.rays();
-                    let side = (total as f64).sqrt().round() as u32;
-                    let mut r = sampling::rng(self.settings.seed, key ^ mix64(j as u64));
-                    let mut seen = 0u32;
-                    for k in 0..total {
-                        let u = (((k % side) as f64) + sampling::uniform(&mut r)) / side as f64;
-                        let w = (((k / side) as f64) + sampling::uniform(&mut r)) / side as f64;
-                        let y = src.polygon.point_at(u, w);
-                        if accel.visible_between(point, face, y, src.face) {
-                            seen += 1;
-                        }
-                    }
-                    *rays += total as u64;
-                    seen as f64 / total as f64
-                }
-            };
+            let v = self
+                .settings
+                .visible_share(accel, face, point, key, j as u64, src, *emits, rays);
             sum += (f * v) * src.radiosity;
         }
         e + rho * sum
