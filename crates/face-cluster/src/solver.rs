@@ -185,15 +185,7 @@ impl MethodParams for FaceClusterSolveParams {
 
     fn validate(&self) -> Result<(), SolveError> {
         self.engine.validate()?;
-        if !(0.0..1.0).contains(&self.gather_opening) {
-            return Err(SolveError::param(
-                "gather_opening",
-                format!(
-                    "{} is not an opening in [0, 1) (the default is {DEFAULT_OPENING}; 0 gathers every face)",
-                    self.gather_opening
-                ),
-            ));
-        }
+        opening_in_range(self.gather_opening, &self.gather_opening.to_string())?;
         // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
         // points of a patch): more rays than point pairs would repeat segments.
         let points = FaceClusterParams::default().samples_per_node.min(4);
@@ -278,17 +270,14 @@ impl MethodParams for FaceClusterSolveParams {
         let opening_given = table.get("gather_opening").map(|v| v.to_string());
         let gather_opening = match table.remove("gather_opening") {
             None => DEFAULT_OPENING,
-            Some(v) => match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
-                Some(x) if (0.0..1.0).contains(&x) => x,
-                _ => {
-                    return Err(SolveError::param(
-                        "gather_opening",
-                        format!(
-                            "{v} is not an opening in [0, 1) (the default is {DEFAULT_OPENING}; 0 gathers every face)"
-                        ),
-                    ));
-                }
-            },
+            Some(v) => {
+                let x = v
+                    .as_float()
+                    .or_else(|| v.as_integer().map(|i| i as f64))
+                    .unwrap_or(f64::NAN);
+                opening_in_range(x, &v.to_string())?;
+                x
+            }
         };
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
@@ -316,6 +305,19 @@ impl MethodParams for FaceClusterSolveParams {
             gather_opening,
         })
     }
+}
+
+/// `x` (written `shown`) as a final-gather opening: in [0, 1), else an error naming `gather_opening`.
+fn opening_in_range(x: f64, shown: &str) -> Result<(), SolveError> {
+    if (0.0..1.0).contains(&x) {
+        return Ok(());
+    }
+    Err(SolveError::param(
+        "gather_opening",
+        format!(
+            "{shown} is not an opening in [0, 1) (the default is {DEFAULT_OPENING}; 0 gathers every face)"
+        ),
+    ))
 }
 
 /// The value of the choice `key` in `table` (removed from it), or its default; a bad value names the key and

@@ -3,17 +3,18 @@
 //! where a far node is gathered whole, a closed sphere's factors summing to one, a per-query cost that grows
 //! far slower than the faces, and the solver's answers in a furnace and across thread counts.
 
+mod common;
+use common::{params, solve, try_params};
+
 use std::collections::HashMap;
 
 use glam::dvec3;
 use radlab_face_cluster::{
-    ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolveParams, FaceClusterSolver,
-    FaceClusterTree, FaceContext,
+    ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
+    FaceContext,
 };
 use radlab_scene::form_factor::closed_form::point_to_parallel_rectangle_corner as corner;
-use radlab_scene::{
-    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin,
-};
+use radlab_scene::{Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, builtin};
 
 /// Howell's factor from a differential area at (x, y, 0) facing +z to the parallel w × d rectangle
 /// [0, w] × [0, d] at height h: four corner rectangles (Howell B-3).
@@ -160,23 +161,6 @@ fn work_per_query_grows_far_slower_than_the_faces() {
     assert!(flat > 8.0, "flat gather: × {flat}");
 }
 
-fn params(pairs: &[(&str, &str)]) -> FaceClusterSolveParams {
-    let pairs: Vec<(String, String)> = pairs
-        .iter()
-        .map(|(k, v)| (k.to_string(), v.to_string()))
-        .collect();
-    FaceClusterSolveParams::from_pairs(&pairs).expect("valid parameters")
-}
-
-fn solve(s: &mut FaceClusterSolver<'_>) {
-    for _ in 0..500 {
-        if s.step().expect("step") != Step::Continue {
-            return;
-        }
-    }
-    panic!("no convergence in 500 steps");
-}
-
 /// Direct light from an emitter (ρ = 0, so B = E whatever the solve) onto a parallel receiver: emitters are
 /// always opened down to their faces, so the solver's final-gather answer is ρ E times Howell's factor
 /// (1e-12) at every opening, whatever ε left in the solution.
@@ -250,15 +234,7 @@ fn final_gather_holds_the_furnace_on_any_thread_count() {
 /// answers (it would change nothing).
 #[test]
 fn an_opening_outside_zero_to_one_or_without_a_final_gather_is_refused() {
-    let refused = |pairs: &[(&str, &str)]| {
-        let pairs: Vec<(String, String)> = pairs
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect();
-        FaceClusterSolveParams::from_pairs(&pairs)
-            .expect_err("refused")
-            .to_string()
-    };
+    let refused = |pairs: &[(&str, &str)]| try_params(pairs).expect_err("refused").to_string();
     for bad in ["1", "1.5", "-0.1", "\"wide\""] {
         let err = refused(&[("reconstruction", "final-gather"), ("gather_opening", bad)]);
         assert!(

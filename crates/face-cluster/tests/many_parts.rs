@@ -2,12 +2,13 @@
 //! self-link, and its links stay far below (roots)²; the closed scene is a furnace, B = E/(1 − ρ) everywhere
 //! (Christensen 1997, §8.3).
 
+mod common;
+use common::params;
+
 use glam::{DVec3, dvec3};
-use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver, FaceNode};
+use radlab_face_cluster::{FaceClusterSolver, FaceNode};
 use radlab_scene::form_factor::point_polygon;
-use radlab_scene::{
-    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, Solver, Step,
-};
+use radlab_scene::{Accel, Material, Rgb, Scene, SceneBuilder, Solution};
 
 /// Adds the box `lo`..`hi` as six quads on eight shared vertices (one dual-connected part), normals out, or
 /// in when `inward`.
@@ -71,24 +72,11 @@ fn room_of_cubes(n: usize, rho: f64) -> Scene {
     b.build().expect("scene")
 }
 
-fn params(pairs: &[(&str, &str)]) -> FaceClusterSolveParams {
-    let pairs: Vec<(String, String)> = pairs
-        .iter()
-        .map(|(k, v)| (k.to_string(), v.to_string()))
-        .collect();
-    FaceClusterSolveParams::from_pairs(&pairs).expect("valid parameters")
-}
-
 /// Checks that the solve starts from the top volume's self-link, then solves to the end.
 fn solve_from_one_link(s: &mut FaceClusterSolver<'_>) {
     assert_eq!(s.engine().link_count(), 1, "the top volume's self-link");
     assert!(matches!(s.engine().nodes()[0], FaceNode::Volume(_)));
-    for _ in 0..500 {
-        if s.step().expect("step") != Step::Continue {
-            return;
-        }
-    }
-    panic!("no convergence in 500 steps");
+    common::solve(s);
 }
 
 /// `n` × `n` unit-spaced tiles (0.5 × 0.5, two triangles each, facing up, ρ = 0.5) in the plane z = 0 and a

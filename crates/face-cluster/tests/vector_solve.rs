@@ -2,6 +2,9 @@
 //! hierarchical engine: tessellation invariance against the single-link closed form, no input face read by
 //! the solve, the concentric-spheres furnace B = E/(1 − ρ), thread-count and scale invariance.
 
+mod common;
+use common::{params, solve};
+
 use glam::dvec3;
 use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver, FaceNode};
 use radlab_scene::{
@@ -103,23 +106,6 @@ fn floor_and_quad(cells: usize, corners: &[glam::DVec3; 4], e: f64) -> Scene {
     b.add_polygon_points(corners, light, "light")
         .expect("valid");
     b.build().expect("scene")
-}
-
-fn params(pairs: &[(&str, &str)]) -> FaceClusterSolveParams {
-    let pairs: Vec<(String, String)> = pairs
-        .iter()
-        .map(|(k, v)| (k.to_string(), v.to_string()))
-        .collect();
-    FaceClusterSolveParams::from_pairs(&pairs).expect("valid parameters")
-}
-
-fn solve(s: &mut FaceClusterSolver<'_>) {
-    for _ in 0..500 {
-        if s.step().expect("step") != Step::Continue {
-            return;
-        }
-    }
-    panic!("no convergence in 500 steps");
 }
 
 /// The floor's radiosity at a few points, the link count, engine node count and faces read.
