@@ -21,7 +21,7 @@ pub const CACHE_MAGIC: &[u8; 8] = b"RLFCTREE";
 
 /// Version of the cache format and of the build algorithm: part of the digest, so a change to either
 /// invalidates old caches.
-pub const CACHE_VERSION: u32 = 2;
+pub const CACHE_VERSION: u32 = 3;
 
 const HEADER_LEN: usize = 8 + 4 + 32;
 
@@ -146,6 +146,7 @@ impl FaceClusterTree {
         let s = self.params.samples_per_node;
         if self.params.validate().is_err()
             || self.samples.len() != n * s
+            || self.sample_normals.len() != n * s
             || self.leaf_of_face.len() != k
         {
             return Err("array lengths do not match".into());

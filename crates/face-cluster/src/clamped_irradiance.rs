@@ -13,11 +13,14 @@
 //! the link, some faces see it from behind and n·u would count them negatively; summed over links from many
 //! directions those negative parts cancel what other links bring, so that a closed part linked whole
 //! gathered nothing from an even surrounding. Such a link instead adds the least-squares line a + b x of the
-//! clamped cosine max(0, x) over the range of cosines x = n·u its receiver's cone allows: b g u to e and a g
-//! to s. Over the whole range [−1, 1] that line is 1/4 + x/2, the clamped cosine's projection on
-//! the constant and linear spherical harmonics (Ramamoorthi & Hanrahan 2001): exact on average over an even
-//! surrounding (a closed part in a furnace receives a quarter of g per unit area, Cauchy's mean projected
-//! area), and within g/4 at any face for one link. The same line gives what a curved source with faces
+//! clamped cosine max(0, x) over the spread of the receiver's cosines x = n_i·u: b g u to e and a g to s.
+//! The spread is a uniform range with the faces' area-weighted mean and variance of x, from the node's sums
+//! Σ A_i n_i and Σ A_i n_i n_iᵀ, kept within the range [cos(α + θ), cos(α − θ)] its normal cone allows
+//! ([`CosineFit::of_node`]: the cone's range alone spreads the cosines evenly between its bounds, and
+//! delivered too much). Over the whole range [−1, 1] that line is 1/4 + x/2, the clamped cosine's
+//! projection on the constant and linear spherical harmonics (Ramamoorthi & Hanrahan 2001): exact on
+//! average over an even surrounding (a closed part in a furnace receives a quarter of g per unit area,
+//! Cauchy's mean projected area), and within g/4 at any face for one link. The same line gives what a curved source with faces
 //! turned away sends toward d: Σ B_i A_i max(0, n_i·d) ≈ a Σ B_i A_i + b p·d, p = Σ B_i A_i n_i.
 
 use glam::{DMat3, DVec3};
@@ -152,6 +155,46 @@ impl CosineFit {
         Self {
             offset: (f0 * m2 - f1 * m1) / det,
             slope: (m0 * f1 - m1 * f0) / det,
+        }
+    }
+
+    /// The fit for the faces of tree node `node` toward unit `u`: exact ([`Self::FACING`]) when its normal
+    /// cone (half-angle θ at angle α from u) faces u whole, α + θ ≤ 90°, or is flat; otherwise the fit over
+    /// the uniform range with the area-weighted mean and variance of the node's cosines x = n_i·u,
+    /// m = (Σ A_i n_i)·u / A and v = uᵀ(Σ A_i n_i n_iᵀ)u / A − m², that is [m − √3 √v, m + √3 √v], within
+    /// the range [cos(α + θ), cos(α − θ)] the cone allows. The cone's range alone spreads the cosines evenly
+    /// between its bounds, and a face cluster's cosines are not spread so: on the 10⁵-face bumpy sphere at
+    /// ε = 1e-5 its straddling links delivered 13.7% more than the mean clamped cosine of their receivers'
+    /// faces, against 0.02% less with the moments (6,390 links); those links made the room's rows sum to
+    /// 1.014 over the sphere. Reads no face: the sums are the node's.
+    pub fn of_node(node: &crate::Node, u: DVec3) -> Self {
+        let theta = node.cone.half_angle;
+        if theta < crate::vector_transport::FLAT_CONE {
+            return Self::FACING;
+        }
+        let alpha = crate::bounds::angle_between(node.cone.axis, u);
+        if alpha + theta <= std::f64::consts::FRAC_PI_2 {
+            return Self::FACING;
+        }
+        let (cone_lo, cone_hi) = (
+            (alpha + theta).min(std::f64::consts::PI).cos(),
+            (alpha - theta).max(0.0).cos(),
+        );
+        if !(node.area > 0.0) {
+            return Self::over(cone_lo, cone_hi);
+        }
+        let m = node.vector_area.dot(u) / node.area;
+        let spread = 3f64.sqrt()
+            * (node.normal_moment.quadratic(u) / node.area - m * m)
+                .max(0.0)
+                .sqrt();
+        let (lo, hi) = ((m - spread).max(cone_lo), (m + spread).min(cone_hi));
+        if lo <= hi {
+            Self::over(lo, hi)
+        } else {
+            // Rounding put the mean outside the cone's range: the nearer bound.
+            let x = m.clamp(cone_lo, cone_hi);
+            Self::over(x, x)
         }
     }
 

@@ -12,14 +12,15 @@
 //!   V max(0, a Σ B_i A_i + b p_N·d) max(0, n·(−d)) / (π r_c²),
 //!
 //! with d the unit direction from N's area-weighted centroid to x at distance r_c, and a + b c the
-//! least-squares line of max(0, c) over the cosines N's normal cone allows toward x (exactly c when every
-//! face of N faces x: [`crate::clamped_irradiance::CosineFit`]). Other nodes are opened; a face is gathered
+//! least-squares line of max(0, c) over the spread of N's faces' cosines toward x, from its normal moments
+//! within the range its normal cone allows (exactly c when every face of N faces x:
+//! [`crate::clamped_irradiance::CosineFit::of_node`]). Other nodes are opened; a face is gathered
 //! exactly, by its point-to-polygon factor (Baum, Rushmeier & Winget 1989, eq. 3) and the shared final
 //! gather's visibility rays ([`radlab_scene::final_gather::GatherSettings::visible_share`]: 16 jittered rays
 //! toward an emitter, one toward another face's centroid). Nodes holding an emitter are always opened, so
 //! direct light is the flat gather's, exact up to its visibility estimate; nodes wholly behind x's plane, or
 //! whose faces all turn away from x, are skipped. A far node's visibility is one ray from x to one of its
-//! sample points, chosen from the query's random stream. At θ = 0 every node is opened and the gather is the
+//! sample points whose face faces x (any of them where none does), chosen from the query's random stream. At θ = 0 every node is opened and the gather is the
 //! flat one over every face; the error of a far node's point transfer is of order θ², and the number of
 //! nodes a query opens grows as log k for a surface seen from a point on it, so the cost per query is
 //! sub-linear in k where the flat gather's is linear.
@@ -48,10 +49,6 @@ use crate::face_node::FaceContext;
 /// Default opening θ: a node is gathered whole when its bounding radius is below θ times its distance from
 /// the query point. Chosen by measurement (docs/methods.md, "Final gather over the tree").
 pub const DEFAULT_OPENING: f64 = 0.25;
-
-/// Normal-cone half-angle below which a node is flat (as the vector transport's).
-const FLAT_CONE: f64 = crate::vector_transport::FLAT_CONE;
-
 /// The solution's values as the tree gather reads them: each face's radiosity and each node's sums.
 #[derive(Debug)]
 pub struct ClusterGather {
@@ -195,19 +192,13 @@ impl ClusterGather {
                 stack.extend(node.children());
                 continue;
             }
-            // A far node: its faces' cosines toward x lie in [cos(α + θ), cos(α − θ)].
+            // A far node: nothing of it faces x when its faces' cosines toward x, within
+            // [cos(α + θ), cos(α − θ)], are all negative.
             let (alpha, theta) = (angle_between(node.cone.axis, to_x), node.cone.half_angle);
             if alpha - theta >= std::f64::consts::FRAC_PI_2 {
                 continue;
             }
-            let fit = if theta < FLAT_CONE {
-                CosineFit::FACING
-            } else {
-                CosineFit::over(
-                    (alpha + theta).min(std::f64::consts::PI).cos(),
-                    (alpha - theta).max(0.0).cos(),
-                )
-            };
+            let fit = CosineFit::of_node(node, to_x / dist);
             let c = centroid[m];
             let v = point - c;
             let r2 = v.length_squared();
@@ -221,9 +212,20 @@ impl ClusterGather {
             if sent.max_element() <= 0.0 {
                 continue;
             }
-            let samples = tree.samples(m);
-            let y = samples[((sampling::uniform(&mut r) * samples.len() as f64) as usize)
-                .min(samples.len() - 1)];
+            // A sample facing x (any sample where none does): the fit already gives the faces turned away
+            // from x nothing, so a ray from behind them must not count that again as occlusion.
+            let (samples, normals) = (tree.samples(m), tree.sample_normals(m));
+            let facing = |j: &usize| normals[*j].dot(point - samples[*j]) > 0.0;
+            let count = (0..samples.len()).filter(facing).count();
+            let pick = (sampling::uniform(&mut r) * count.max(1) as f64) as usize;
+            let y = if count == 0 {
+                samples[pick.min(samples.len() - 1)]
+            } else {
+                samples[(0..samples.len())
+                    .filter(facing)
+                    .nth(pick.min(count - 1))
+                    .unwrap_or(0)]
+            };
             rays += 1;
             if accel.visible_between(point, face, y, usize::MAX) {
                 sum += sent * (cos_x / (std::f64::consts::PI * r2));

@@ -12,7 +12,8 @@
 //!   (Willmott et al. 1999, section 4: the leaf rule B_i = E_i + ρ_i n_i·e summed without visiting leaves);
 //! - `samples_per_node` points on its faces for visibility rays: stratified over each face (a rotated
 //!   Hammersley set through [`radlab_scene::Polygon::point_at`]), and at a parent drawn from the children's
-//!   points in proportion to the children's areas (stratified), so they stay area-uniform at every level.
+//!   points in proportion to the children's areas (stratified), so they stay area-uniform at every level;
+//!   each with its face's normal, so that a visibility estimate can keep to the samples facing the other end.
 
 use std::ops::Range;
 
@@ -53,6 +54,10 @@ pub struct Node {
     pub sphere: Sphere,
     /// Per channel (r, g, b): M = Σ ρ_i A_i n_i n_iᵀ.
     pub m: [SymMat3; 3],
+    /// N = Σ A_i n_i n_iᵀ: with `vector_area` and `area`, the mean and second moment of the cosines n_i·u
+    /// toward any direction u (area-weighted), from which a cluster's clamped cosine is fitted
+    /// ([`crate::clamped_irradiance::CosineFit::of_node`]).
+    pub normal_moment: SymMat3,
     /// Per channel (r, g, b): p_E = Σ E_i A_i n_i.
     pub p_e: [DVec3; 3],
 }
@@ -108,6 +113,7 @@ pub struct FaceClusterTree {
     pub(crate) face_order: Vec<u32>,
     pub(crate) leaf_of_face: Vec<u32>,
     pub(crate) samples: Vec<DVec3>,
+    pub(crate) sample_normals: Vec<DVec3>,
     pub(crate) stats: ContractionStats,
 }
 
@@ -190,12 +196,15 @@ impl FaceClusterTree {
         // Leaves from their faces (in parallel), then internal nodes from their children, last to first.
         let s = params.samples_per_node;
         let mut samples = vec![DVec3::ZERO; nreg * s];
+        let mut sample_normals = vec![DVec3::ZERO; nreg * s];
         let mut nodes: Vec<Node> = samples
             .par_chunks_mut(s)
+            .zip(sample_normals.par_chunks_mut(s))
             .enumerate()
-            .map(|(n, pts)| {
+            .map(|(n, (pts, normals))| {
                 let r = region_of[n] as usize;
                 let mut node = if r < k {
+                    normals.fill(scene.faces[r].normal);
                     leaf_node(scene, r, params, pts)
                 } else {
                     placeholder()
@@ -221,13 +230,24 @@ impl FaceClusterTree {
                 &tail[1],
                 &con.regions[region_of[n] as usize],
             );
+            // The same picks for the points and their normals (one stream).
+            let rng = sampling::rng(params.seed, INTERNAL_STREAM | n as u64);
+            let areas = (nodes[c].area, nodes[c + 1].area);
             let (head, tail) = samples.split_at_mut(c * s);
             pick_samples(
                 &mut head[n * s..(n + 1) * s],
                 &tail[..s],
                 &tail[s..2 * s],
-                (nodes[c].area, nodes[c + 1].area),
-                sampling::rng(params.seed, INTERNAL_STREAM | n as u64),
+                areas,
+                rng.clone(),
+            );
+            let (head, tail) = sample_normals.split_at_mut(c * s);
+            pick_samples(
+                &mut head[n * s..(n + 1) * s],
+                &tail[..s],
+                &tail[s..2 * s],
+                areas,
+                rng,
             );
         }
         Ok(Self {
@@ -238,6 +258,7 @@ impl FaceClusterTree {
             face_order,
             leaf_of_face,
             samples,
+            sample_normals,
             stats: con.stats,
         })
     }
@@ -278,6 +299,13 @@ impl FaceClusterTree {
         &self.samples[n * s..(n + 1) * s]
     }
 
+    /// The unit normals of the faces the sample points of node `n` lie on, in the order of
+    /// [`Self::samples`].
+    pub fn sample_normals(&self, n: usize) -> &[DVec3] {
+        let s = self.params.samples_per_node;
+        &self.sample_normals[n * s..(n + 1) * s]
+    }
+
     /// The build parameters.
     pub fn params(&self) -> &FaceClusterParams {
         &self.params
@@ -308,7 +336,7 @@ impl FaceClusterTree {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node>()
             + (self.face_order.len() + self.leaf_of_face.len()) * 4
-            + self.samples.len() * size_of::<DVec3>()
+            + (self.samples.len() + self.sample_normals.len()) * size_of::<DVec3>()
     }
 }
 
@@ -333,6 +361,7 @@ fn placeholder() -> Node {
             radius: 0.0,
         },
         m: [SymMat3::ZERO; 3],
+        normal_moment: SymMat3::ZERO,
         p_e: [DVec3::ZERO; 3],
     }
 }
@@ -361,6 +390,7 @@ fn leaf_node(scene: &Scene, f: usize, params: &FaceClusterParams, pts: &mut [DVe
         obb: OrientedBox::fit(axes, v.iter().copied()),
         sphere: Sphere::about(face.centroid, v),
         m: std::array::from_fn(|c| SymMat3::outer(n, rho[c] * face.area)),
+        normal_moment: SymMat3::outer(n, face.area),
         p_e: std::array::from_fn(|c| n * (e[c] * face.area)),
         ..placeholder()
     }
@@ -388,15 +418,16 @@ fn pull_up(node: &mut Node, a: &Node, b: &Node, region: &crate::contraction::Reg
     node.obb = OrientedBox::fit(axes, a.obb.corners().into_iter().chain(b.obb.corners()));
     node.sphere = a.sphere.union(&b.sphere);
     node.m = std::array::from_fn(|c| a.m[c] + b.m[c]);
+    node.normal_moment = a.normal_moment + b.normal_moment;
     node.p_e = std::array::from_fn(|c| a.p_e[c] + b.p_e[c]);
 }
 
 /// A parent's samples from its children's: child 0 gives those of the stratified positions
 /// (j + ξ)/S that fall below its area fraction, child 1 the rest, each from a random offset in its list.
-fn pick_samples(
-    out: &mut [DVec3],
-    c0: &[DVec3],
-    c1: &[DVec3],
+fn pick_samples<T: Copy>(
+    out: &mut [T],
+    c0: &[T],
+    c1: &[T],
     areas: (f64, f64),
     mut r: sampling::Rng,
 ) {

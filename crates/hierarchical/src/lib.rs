@@ -116,5 +116,6 @@ pub use params::{
     DEFAULT_RECONSTRUCTION, ErrorNorm, Gather, HierarchicalParams, MIN_ELEMENT_SIZE_REL, Oracle,
     Schedule,
 };
+pub use push_pull::LinkFilter;
 pub use solver::HierarchicalSolver;
 pub use transport::{GatherAt, LinearState, NodeView, Transport};

@@ -30,11 +30,15 @@ use radlab_scene::{Rgb, SolveError};
 use rayon::prelude::*;
 
 use crate::hierarchy::{Engine, NONE};
+use crate::link::Link;
 use crate::node::NodeKind;
 use crate::transport::{LinearState, Transport};
 
 /// A per-node state of the solution: radiosity (area mean) and the transport's exitance.
 pub(crate) type Field<X> = (Vec<Rgb>, Vec<X>);
+
+/// Which links a partial gather goes through, given (receiver, source, link).
+pub type LinkFilter<'f, N> = dyn Fn(&N, &N, &Link) -> bool + Sync + 'f;
 
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Applies M (and adds E when `with_emission`) to a per-node radiosity `b` and exitance `x` whose inner
@@ -69,6 +73,19 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Gather and push: every node's total irradiance when the nodes send `b` and `x`; leaves' irradiance
     /// multiplied by the row normalisation when `scaled` and it is on.
     fn gather_push(&self, b: &[Rgb], x: &[T::Exitance], scaled: bool) -> Vec<T::Irradiance> {
+        self.gather_push_through(b, x, scaled, None)
+    }
+
+    /// Gather and push: every node's total irradiance when the nodes send `b` and `x`, through the links
+    /// `keep` accepts (all of them when `None`); leaves' irradiance multiplied by the row normalisation when
+    /// `scaled` and it is on.
+    fn gather_push_through(
+        &self,
+        b: &[Rgb],
+        x: &[T::Exitance],
+        scaled: bool,
+        keep: Option<&LinkFilter<'_, N>>,
+    ) -> Vec<T::Irradiance> {
         let view = self.view();
         // What each link sends.
         let flux: Vec<Vec<Rgb>> = self
@@ -80,6 +97,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     .enumerate()
                     .map(|(k, l)| {
                         if l.overlap {
+                            return Rgb::ZERO;
+                        }
+                        if keep
+                            .is_some_and(|f| !f(&self.nodes[r], &self.nodes[l.source as usize], l))
+                        {
                             return Rgb::ZERO;
                         }
                         if self.has_open {
@@ -139,10 +161,22 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.unit_gather(true)
     }
 
+    /// The part of each leaf's row sum (as [`Engine::row_sums`], before the row normalisation) that comes
+    /// through the links `keep` accepts, given (receiver, source, link): the operator's rows split by kind
+    /// of link or by source, to compare with the form factors the scene's geometry gives.
+    pub fn row_sums_through(&self, keep: &LinkFilter<'_, N>) -> Vec<Rgb> {
+        self.unit_gather_through(false, Some(keep))
+    }
+
     /// The scalar irradiance of every leaf when every leaf sends B = 1 (`scaled`: with the row
     /// normalisation applied). A leaf's scalar irradiance is read through its reflection, H = B/ρ per channel
     /// (zero where ρ is zero: such a leaf reflects nothing, whatever it receives).
     pub(crate) fn unit_gather(&self, scaled: bool) -> Vec<Rgb> {
+        self.unit_gather_through(scaled, None)
+    }
+
+    /// [`Engine::unit_gather`] through the links `keep` accepts.
+    fn unit_gather_through(&self, scaled: bool, keep: Option<&LinkFilter<'_, N>>) -> Vec<Rgb> {
         let n = self.nodes.len();
         let mut u = vec![Rgb::ZERO; n];
         let mut ux = vec![T::Exitance::default(); n];
@@ -155,7 +189,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
         }
         self.pull(&mut u, &mut ux);
-        let h = self.gather_push(&u, &ux, scaled);
+        let h = self.gather_push_through(&u, &ux, scaled, keep);
         (0..n)
             .map(|i| {
                 if self.children[i].1 != 0 {
