@@ -20,8 +20,8 @@
 //! delivered too much). Over the whole range [−1, 1] that line is 1/4 + x/2, the clamped cosine's
 //! projection on the constant and linear spherical harmonics (Ramamoorthi & Hanrahan 2001): exact on
 //! average over an even surrounding (a closed part in a furnace receives a quarter of g per unit area,
-//! Cauchy's mean projected area), and within g/4 at any face for one link. The same line gives what a curved source with faces
-//! turned away sends toward d: Σ B_i A_i max(0, n_i·d) ≈ a Σ B_i A_i + b p·d, p = Σ B_i A_i n_i.
+//! Cauchy's mean projected area), and within g/4 at any face for one link. The same line gives what a
+//! curved source with faces turned away sends toward d: Σ B_i A_i max(0, n_i·d) ≈ a Σ B_i A_i + b p·d, p = Σ B_i A_i n_i.
 
 use glam::{DMat3, DVec3};
 use radlab_hierarchical::LinearState;
@@ -165,8 +165,10 @@ impl CosineFit {
     /// the range [cos(α + θ), cos(α − θ)] the cone allows. The cone's range alone spreads the cosines evenly
     /// between its bounds, and a face cluster's cosines are not spread so: on the 10⁵-face bumpy sphere at
     /// ε = 1e-5 its straddling links delivered 13.7% more than the mean clamped cosine of their receivers'
-    /// faces, against 0.02% less with the moments (6,390 links); those links made the room's rows sum to
-    /// 1.014 over the sphere. Reads no face: the sums are the node's.
+    /// faces, against 0.02% less with the moments (6,390 links, measured once by a probe over the solve's
+    /// links); those links made the room's rows sum to 1.014 over the sphere. The test
+    /// `straddled_clusters_fit_their_faces_clamped_cosines` checks the fit against the faces over random
+    /// straddling directions. Reads no face: the sums are the node's.
     pub fn of_node(node: &crate::Node, u: DVec3) -> Self {
         let theta = node.cone.half_angle;
         if theta < crate::vector_transport::FLAT_CONE {

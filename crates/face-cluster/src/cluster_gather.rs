@@ -20,8 +20,8 @@
 //! toward an emitter, one toward another face's centroid). Nodes holding an emitter are always opened, so
 //! direct light is the flat gather's, exact up to its visibility estimate; nodes wholly behind x's plane, or
 //! whose faces all turn away from x, are skipped. A far node's visibility is one ray from x to one of its
-//! sample points whose face faces x (any of them where none does), chosen from the query's random stream. At θ = 0 every node is opened and the gather is the
-//! flat one over every face; the error of a far node's point transfer is of order θ², and the number of
+//! sample points whose face faces x (any of them where none does), chosen from the query's random stream.
+//! At θ = 0 every node is opened and the gather is the flat one over every face; the error of a far node's point transfer is of order θ², and the number of
 //! nodes a query opens grows as log k for a surface seen from a point on it, so the cost per query is
 //! sub-linear in k where the flat gather's is linear.
 //!
@@ -49,6 +49,7 @@ use crate::face_node::FaceContext;
 /// Default opening θ: a node is gathered whole when its bounding radius is below θ times its distance from
 /// the query point. Chosen by measurement (docs/methods.md, "Final gather over the tree").
 pub const DEFAULT_OPENING: f64 = 0.25;
+
 /// The solution's values as the tree gather reads them: each face's radiosity and each node's sums.
 #[derive(Debug)]
 pub struct ClusterGather {

@@ -233,22 +233,16 @@ impl FaceClusterTree {
             // The same picks for the points and their normals (one stream).
             let rng = sampling::rng(params.seed, INTERNAL_STREAM | n as u64);
             let areas = (nodes[c].area, nodes[c + 1].area);
-            let (head, tail) = samples.split_at_mut(c * s);
-            pick_samples(
-                &mut head[n * s..(n + 1) * s],
-                &tail[..s],
-                &tail[s..2 * s],
-                areas,
-                rng.clone(),
-            );
-            let (head, tail) = sample_normals.split_at_mut(c * s);
-            pick_samples(
-                &mut head[n * s..(n + 1) * s],
-                &tail[..s],
-                &tail[s..2 * s],
-                areas,
-                rng,
-            );
+            for list in [&mut samples, &mut sample_normals] {
+                let (head, tail) = list.split_at_mut(c * s);
+                pick_samples(
+                    &mut head[n * s..(n + 1) * s],
+                    &tail[..s],
+                    &tail[s..2 * s],
+                    areas,
+                    rng.clone(),
+                );
+            }
         }
         Ok(Self {
             digest,
@@ -424,10 +418,10 @@ fn pull_up(node: &mut Node, a: &Node, b: &Node, region: &crate::contraction::Reg
 
 /// A parent's samples from its children's: child 0 gives those of the stratified positions
 /// (j + ξ)/S that fall below its area fraction, child 1 the rest, each from a random offset in its list.
-fn pick_samples<T: Copy>(
-    out: &mut [T],
-    c0: &[T],
-    c1: &[T],
+fn pick_samples(
+    out: &mut [DVec3],
+    c0: &[DVec3],
+    c1: &[DVec3],
     areas: (f64, f64),
     mut r: sampling::Rng,
 ) {

@@ -29,9 +29,9 @@
 //! faces' cosines x = n_i·d (uniform with their area-weighted mean and variance, from the node's Σ A_i n_i
 //! and Σ A_i n_i n_iᵀ, within [cos(α + θ), cos(α − θ)] its cone allows): b g (−d) into e and a g into an
 //! isotropic irradiance s, of which every face takes s; a source sends a Σ B_i A_i + b p·d
-//! ([`crate::clamped_irradiance`]). Summed over
-//! many such links the vector form alone cancels what opposite sides bring (a closed part in a furnace
-//! gathered nothing), and counts faces that see a link from behind negatively.
+//! ([`crate::clamped_irradiance`]). Summed over many such links the vector form alone cancels what
+//! opposite sides bring (a closed part in a furnace gathered nothing), and counts faces that see a link from
+//! behind negatively.
 //!
 //! Pairs whose bounds overlap get a link that transfers nothing, with the form-factor bounds
 //! F_RS ≤ min(1, A_S/A_R) (reciprocity), so the oracle splits them until the power they could carry is below
@@ -416,7 +416,9 @@ fn facing(n: &FaceNode<'_>, toward: DVec3, spread: f64) -> (bool, bool) {
 /// bound centres: exactly by its vector (a volume, a flat node, or a curved node whose faces all face the
 /// other end, α + θ ≤ 90°), else by the least-squares line of the clamped cosine over the spread of its
 /// faces' cosines ([`CosineFit::of_node`], from the node's normal moments, within the range its cone allows).
-/// The link's spread σ is left out, as the point transfer itself takes the link along one direction.
+/// The link's spread σ is left out, as the point transfer itself takes the link along one direction: when the
+/// fit spanned the cone's range, widening that range by σ raised the fitted offsets, and the concentric
+/// spheres' furnace went from 0.2% low to 1.5% high.
 fn cosine_fit(n: &FaceNode<'_>, toward: DVec3) -> CosineFit {
     match n {
         FaceNode::Cluster(c) => CosineFit::of_node(c.node(), toward),
