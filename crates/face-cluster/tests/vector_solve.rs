@@ -375,7 +375,8 @@ fn refinement_stays_above_the_faces() {
 /// This holds with `self_exchange = "cap"`, whose self-links refine down to the faces; the default traced
 /// self-exchange keeps its siblings' links whole with ray-estimated factors, whose noise (rows within
 /// ±7e-3 here) makes this sphere diverge at ρ = 0.999 (row_normalisation = "closed-scenes" then holds it:
-/// `closed_scene_rows_make_the_furnaces_hold_at_rho_0_999`).
+/// `closed_scene_rows_make_the_furnaces_hold_at_rho_0_999`). The rows split by source
+/// (`row_sums_through`) add up to them.
 #[test]
 fn furnace_sphere_rows_sum_to_one() {
     let rho = 0.999;
@@ -394,6 +395,17 @@ fn furnace_sphere_rows_sum_to_one() {
         worst = worst.max((r - 1.0).abs());
     }
     assert!(worst <= 1e-12, "a row sums to 1 ± {worst:.3e}");
+    // The rows split by source (here the parity of the source's id) add up to the whole rows.
+    let even = e.row_sums_through(&|_, _, l| l.source % 2 == 0);
+    let odd = e.row_sums_through(&|_, _, l| l.source % 2 == 1);
+    let (mut sum_even, mut sum_odd) = (0.0, 0.0);
+    for i in (0..e.nodes().len() as u32).filter(|&i| e.is_leaf(i)) {
+        let (r, parts) = (rows[i as usize].x, even[i as usize].x + odd[i as usize].x);
+        assert!((parts - r).abs() <= 1e-12, "leaf {i}: parts {parts} of {r}");
+        sum_even += even[i as usize].x;
+        sum_odd += odd[i as usize].x;
+    }
+    assert!(sum_even > 0.0 && sum_odd > 0.0, "one part is empty");
 }
 
 /// The bumpy sphere's room is closed, so every point's form factors sum to one, and so should each leaf's
