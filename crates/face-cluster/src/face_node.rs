@@ -376,31 +376,30 @@ impl FaceNode<'_> {
         }
     }
 
-    /// The unit normals at [`Self::sample_points`] (a volume's points lie on surfaces of every orientation:
-    /// `None`).
-    pub fn sample_normals(&self) -> Option<Vec<DVec3>> {
-        match self {
-            Self::Volume(_) => None,
-            Self::Cluster(c) => Some(c.ctx.tree.sample_normals(c.id as usize).to_vec()),
-            Self::Patch(p) => Some(vec![p.normal; 4]),
-        }
-    }
-
     /// The sample points facing `target` (in front of their face's plane), or all of them where none does or
-    /// the node has no sample normals: where a link's visibility is sampled, since the faces turned away
-    /// from the other end take no light from it whatever lies between.
+    /// the node is a volume (its points lie on surfaces of every orientation): where a link's visibility is
+    /// sampled, since the faces turned away from the other end take no light from it whatever lies between.
     pub fn sample_points_facing(&self, target: DVec3) -> Vec<DVec3> {
-        let pts = self.sample_points();
-        let Some(normals) = self.sample_normals() else {
-            return pts;
+        let Self::Cluster(c) = self else {
+            // A patch's samples share its normal: all face the target or none does.
+            return self.sample_points();
         };
+        let tree = &c.ctx.tree;
+        let (pts, normals) = (
+            tree.samples(c.id as usize),
+            tree.sample_normals(c.id as usize),
+        );
         let facing: Vec<DVec3> = pts
             .iter()
-            .zip(&normals)
+            .zip(normals)
             .filter(|(p, n)| n.dot(target - **p) > 0.0)
             .map(|(p, _)| *p)
             .collect();
-        if facing.is_empty() { pts } else { facing }
+        if facing.is_empty() {
+            pts.to_vec()
+        } else {
+            facing
+        }
     }
 }
 
