@@ -128,7 +128,8 @@ pub struct HierarchicalParams {
 /// over 6,245 leaves, 11 s over 9,449 in the room, on a loaded 2-core machine), so images of finely refined
 /// solutions are slow; ask for `constant` to read the leaves themselves. Since links from inner sources send
 /// their leaves' radiosity weighted by how much each sees the receiver (the quickstart, idle machine): 1.2%
-/// against 4.3% constant at ε = 0.01, volume clusters 1.4% at ε = 1e-4.
+/// against 4.3% constant at ε = 0.01, volume clusters 1.4% at ε = 1e-4; in the quickstart of 2026-12-02,
+/// after later changes, 1.0% against 3.7%, worst point 39% against 2929%.
 pub const DEFAULT_RECONSTRUCTION: Reconstruction = Reconstruction::FinalGather;
 
 impl HierarchicalParams {
@@ -260,8 +261,8 @@ impl MethodParams for HierarchicalParams {
                 "point answers: constant | gouraud (vertex-interpolated) | final-gather (one more gather from every \
                  leaf, exact point-to-polygon factors and rays; its cost is charged when answering); \
                  hierarchical's and volume-cluster's default is final-gather, chosen by measurement (Cornell box, 512 \
-                 points, default epsilon, the quickstart: relative L1 1.2% against 4.3% constant for hierarchical, \
-                 1.4% for volume clusters; worst point 25% against 2895% constant); answering costs a kernel per \
+                 points, default epsilon, the quickstart of 2026-12-02: relative L1 1.0% against 3.7% constant for \
+                 hierarchical, 1.4% for volume clusters; worst point 39% against 2929% constant); answering costs a kernel per \
                  leaf and query, so images of fine solutions are slow",
             ),
             (
