@@ -215,17 +215,13 @@ impl ClusterGather {
             }
             // A sample facing x (any sample where none does): the fit already gives the faces turned away
             // from x nothing, so a ray from behind them must not count that again as occlusion.
-            let (samples, normals) = (tree.samples(m), tree.sample_normals(m));
-            let facing = |j: &usize| normals[*j].dot(point - samples[*j]) > 0.0;
-            let count = (0..samples.len()).filter(facing).count();
+            let (samples, mut facing) = (tree.samples(m), tree.samples_facing(m, point));
+            let count = facing.clone().count();
             let pick = (sampling::uniform(&mut r) * count.max(1) as f64) as usize;
             let y = if count == 0 {
                 samples[pick.min(samples.len() - 1)]
             } else {
-                samples[(0..samples.len())
-                    .filter(facing)
-                    .nth(pick.min(count - 1))
-                    .unwrap_or(0)]
+                facing.nth(pick.min(count - 1)).unwrap_or(samples[0])
             };
             rays += 1;
             if accel.visible_between(point, face, y, usize::MAX) {

@@ -385,18 +385,9 @@ impl FaceNode<'_> {
             return self.sample_points();
         };
         let tree = &c.ctx.tree;
-        let (pts, normals) = (
-            tree.samples(c.id as usize),
-            tree.sample_normals(c.id as usize),
-        );
-        let facing: Vec<DVec3> = pts
-            .iter()
-            .zip(normals)
-            .filter(|(p, n)| n.dot(target - **p) > 0.0)
-            .map(|(p, _)| *p)
-            .collect();
+        let facing: Vec<DVec3> = tree.samples_facing(c.id as usize, target).collect();
         if facing.is_empty() {
-            pts.to_vec()
+            tree.samples(c.id as usize).to_vec()
         } else {
             facing
         }

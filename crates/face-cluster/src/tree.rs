@@ -300,6 +300,21 @@ impl FaceClusterTree {
         &self.sample_normals[n * s..(n + 1) * s]
     }
 
+    /// The sample points of node `n` in front of their face's plane as seen from `toward`, in the order of
+    /// [`Self::samples`]: where a visibility ray toward `toward` may leave from, since a face turned away
+    /// takes no light from there whatever lies between.
+    pub fn samples_facing(
+        &self,
+        n: usize,
+        toward: DVec3,
+    ) -> impl Iterator<Item = DVec3> + Clone + '_ {
+        self.samples(n)
+            .iter()
+            .zip(self.sample_normals(n))
+            .filter(move |(p, normal)| normal.dot(toward - **p) > 0.0)
+            .map(|(p, _)| *p)
+    }
+
     /// The build parameters.
     pub fn params(&self) -> &FaceClusterParams {
         &self.params
