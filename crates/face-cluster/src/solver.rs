@@ -26,7 +26,9 @@
 //! exactly. It reads every face's constant answer (a pass linear in k after each step) and costs about log k
 //! kernel evaluations and rays a point, charged to answering. It is the most accurate of the three answers,
 //! but not the default: `radlab solve` answers at 16 points a face for its face table and at every corner of
-//! its mesh, tens of millions of gathers at 10⁶ faces, where Gouraud answers cost seconds.
+//! its mesh, tens of millions of gathers at 10⁶ faces, where Gouraud answers cost seconds. With
+//! `gather_values = "gathered"` the values it reads are themselves gathered first, at every face's centroid
+//! (a second bounce: [`crate::cluster_gather`]), for k more gathers a solution, also charged to answering.
 
 use std::sync::{Arc, OnceLock};
 
@@ -45,7 +47,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::clamped_irradiance::ClampedIrradiance;
-use crate::cluster_gather::{ClusterGather, DEFAULT_OPENING};
+use crate::cluster_gather::{
+    ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues, area_mean,
+};
 use crate::face_node::{FaceContext, FaceNode};
 use crate::irradiance_gradient::IrradianceField;
 use crate::self_exchange::{SELF_RAYS, SelfExchange, SelfExchangeMode};
@@ -92,6 +96,12 @@ pub struct FaceClusterSolveParams {
     /// distance from the query point is gathered whole ([`crate::cluster_gather`]); 0 opens every node down
     /// to the faces. Default [`DEFAULT_OPENING`].
     pub gather_opening: f64,
+    /// Where the final gather's face values come from ([`GatherValues`]). Default [`GatherValues::Solution`].
+    #[serde(default)]
+    pub gather_values: GatherValues,
+    /// The values' gather's opening in [0, 1) under [`GatherValues::Gathered`]. Default
+    /// [`DEFAULT_VALUES_OPENING`].
+    pub values_opening: f64,
 }
 
 impl Default for FaceClusterSolveParams {
@@ -114,6 +124,8 @@ impl Default for FaceClusterSolveParams {
             irradiance_field: IrradianceField::Linear,
             self_rays: SELF_RAYS,
             gather_opening: DEFAULT_OPENING,
+            gather_values: GatherValues::Solution,
+            values_opening: DEFAULT_VALUES_OPENING,
         }
     }
 }
@@ -173,6 +185,18 @@ impl MethodParams for FaceClusterSolveParams {
              linear in the faces per point): larger, faster answers with an error of order its square",
         ));
         d.push((
+            "gather_values",
+            "final-gather only: the values the final gather reads: solution (default: the solution's constant \
+             answers) | gathered (each face's and patch leaf's value gathered first over the tree at its \
+             centroid from the solution's answers, at values_opening: a second bounce, so the solution's \
+             error reaches a point only through one more reflection and the values' direct light is exact up \
+             to visibility rays, for k more gathers a solution, charged to answering)",
+        ));
+        d.push((
+            "values_opening",
+            "gather_values = \"gathered\" only: the values' gather's opening in [0, 1) (default 0.5)",
+        ));
+        d.push((
             "self_exchange",
             "traced (default: `self_rays` rays from every face before the solve estimate every node's self form \
              factor and its children's exchange, carried evenly by nodes of 32 faces or more that mostly face one \
@@ -185,7 +209,16 @@ impl MethodParams for FaceClusterSolveParams {
 
     fn validate(&self) -> Result<(), SolveError> {
         self.engine.validate()?;
-        opening_in_range(self.gather_opening, &self.gather_opening.to_string())?;
+        opening_in_range(
+            "gather_opening",
+            self.gather_opening,
+            &self.gather_opening.to_string(),
+        )?;
+        opening_in_range(
+            "values_opening",
+            self.values_opening,
+            &self.values_opening.to_string(),
+        )?;
         // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
         // points of a patch): more rays than point pairs would repeat segments.
         let points = FaceClusterParams::default().samples_per_node.min(4);
@@ -228,6 +261,11 @@ impl MethodParams for FaceClusterSolveParams {
                 ),
                 ("self_rays".to_string(), d.self_rays.to_string()),
                 ("gather_opening".to_string(), d.gather_opening.to_string()),
+                (
+                    "gather_values".to_string(),
+                    format!("\"{}\"", d.gather_values.as_str()),
+                ),
+                ("values_opening".to_string(), d.values_opening.to_string()),
             ])
             .collect()
     }
@@ -267,31 +305,39 @@ impl MethodParams for FaceClusterSolveParams {
                 }
             },
         };
-        let opening_given = table.get("gather_opening").map(|v| v.to_string());
-        let gather_opening = match table.remove("gather_opening") {
-            None => DEFAULT_OPENING,
-            Some(v) => {
-                let x = v
-                    .as_float()
-                    .or_else(|| v.as_integer().map(|i| i as f64))
-                    .unwrap_or(f64::NAN);
-                opening_in_range(x, &v.to_string())?;
-                x
-            }
-        };
+        let gather_given = ["gather_opening", "gather_values", "values_opening"]
+            .into_iter()
+            .find_map(|k| Some((k, table.get(k)?.to_string())));
+        let values_given = table.get("values_opening").map(|v| v.to_string());
+        let gather_opening = opening(&mut table, "gather_opening", DEFAULT_OPENING)?;
+        let values_opening = opening(&mut table, "values_opening", DEFAULT_VALUES_OPENING)?;
+        let gather_values: GatherValues =
+            choice(&mut table, "gather_values", "solution or gathered")?;
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
         let engine = HierarchicalParams::from_table(full)?;
-        if let Some(v) = opening_given
+        if let Some((key, v)) = gather_given
             && engine.reconstruction != Reconstruction::FinalGather
         {
             return Err(SolveError::param(
-                "gather_opening",
+                key,
                 format!(
-                    "gather_opening = {v} only applies to final-gather answers, and reconstruction is {}; set \
-                     reconstruction = \"final-gather\" or remove gather_opening",
+                    "{key} = {v} only applies to final-gather answers, and reconstruction is {}; set \
+                     reconstruction = \"final-gather\" or remove {key}",
                     engine.reconstruction.as_str()
+                ),
+            ));
+        }
+        if let Some(v) = values_given
+            && gather_values != GatherValues::Gathered
+        {
+            return Err(SolveError::param(
+                "values_opening",
+                format!(
+                    "values_opening = {v} only applies to gathered values, and gather_values is {}; set \
+                     gather_values = \"gathered\" or remove values_opening",
+                    gather_values.as_str()
                 ),
             ));
         }
@@ -303,21 +349,43 @@ impl MethodParams for FaceClusterSolveParams {
             irradiance_field,
             self_rays,
             gather_opening,
+            gather_values,
+            values_opening,
         })
     }
 }
 
-/// `x` (written `shown`) as a final-gather opening: in [0, 1), else an error naming `gather_opening`.
-fn opening_in_range(x: f64, shown: &str) -> Result<(), SolveError> {
+/// `x` (written `shown`) as the opening `key`: in [0, 1), else an error naming `key`.
+fn opening_in_range(key: &str, x: f64, shown: &str) -> Result<(), SolveError> {
     if (0.0..1.0).contains(&x) {
         return Ok(());
     }
+    let default = if key == "values_opening" {
+        DEFAULT_VALUES_OPENING
+    } else {
+        DEFAULT_OPENING
+    };
     Err(SolveError::param(
-        "gather_opening",
+        key,
         format!(
-            "{shown} is not an opening in [0, 1) (the default is {DEFAULT_OPENING}; 0 gathers every face)"
+            "{shown} is not an opening in [0, 1) (the default is {default}; 0 gathers every face)"
         ),
     ))
+}
+
+/// The opening `key` of `table` (removed from it), or `default`.
+fn opening(table: &mut toml::Table, key: &str, default: f64) -> Result<f64, SolveError> {
+    match table.remove(key) {
+        None => Ok(default),
+        Some(v) => {
+            let x = v
+                .as_float()
+                .or_else(|| v.as_integer().map(|i| i as f64))
+                .unwrap_or(f64::NAN);
+            opening_in_range(key, x, &v.to_string())?;
+            Ok(x)
+        }
+    }
 }
 
 /// The value of the choice `key` in `table` (removed from it), or its default; a bad value names the key and
@@ -356,6 +424,10 @@ pub struct FaceClusterSolver<'a> {
     gather_opening: Option<f64>,
     /// The final gather's values, built at the first query after a step.
     gather: OnceLock<ClusterGather>,
+    /// Where the final gather's values come from.
+    gather_values: GatherValues,
+    /// The values' gather's opening under [`GatherValues::Gathered`].
+    values_opening: f64,
     /// Rays and kernel evaluations of final gathers over earlier solutions.
     past_gather_work: (u64, u64),
     seed: u64,
@@ -460,6 +532,8 @@ impl<'a> FaceClusterSolver<'a> {
             vertex_adjacency: OnceLock::new(),
             gather_opening,
             gather: OnceLock::new(),
+            gather_values: params.gather_values,
+            values_opening: params.values_opening,
             past_gather_work: (0, 0),
             seed,
             scanned: 0,
@@ -666,17 +740,23 @@ impl<'a> FaceClusterSolver<'a> {
             let values: Vec<Rgb> = (0..k)
                 .into_par_iter()
                 .map(|f| match patches.get(&f) {
-                    Some(leaves) => {
-                        let area: f64 = leaves.iter().map(|l| l.polygon.area()).sum();
-                        let sum = leaves
-                            .iter()
-                            .fold(Rgb::ZERO, |s, l| s + l.radiosity * l.polygon.area());
-                        if area > 0.0 { sum / area } else { Rgb::ZERO }
-                    }
+                    Some(leaves) => area_mean(leaves),
                     None => self.constant_at(f, self.scene.faces[f].centroid),
                 })
                 .collect();
-            ClusterGather::new(&self.ctx, values, patches, opening, self.seed)
+            match self.gather_values {
+                GatherValues::Solution => {
+                    ClusterGather::new(&self.ctx, values, patches, opening, self.seed)
+                }
+                GatherValues::Gathered => ClusterGather::regathered(
+                    &self.ctx,
+                    self.accel,
+                    values,
+                    patches,
+                    (opening, self.values_opening),
+                    self.seed,
+                ),
+            }
         })
     }
 

@@ -315,6 +315,38 @@ impl FaceClusterTree {
             .map(|(p, _)| *p)
     }
 
+    /// One sample point of node `n` for a visibility ray from `x` (on a surface of normal `normal`), chosen
+    /// by `u` in [0, 1) with probability proportional to the point kernel between them,
+    /// w_s = max(0, n_s·(x − y_s)) max(0, normal·(y_s − x)) / |x − y_s|⁴, so that one ray's expected visibility
+    /// is the kernel-weighted mean over the samples; evenly among all samples where every weight is 0.
+    pub fn sample_toward(&self, n: usize, x: DVec3, normal: DVec3, u: f64) -> DVec3 {
+        let samples = self.samples(n);
+        let weight = |(y, ns): (&DVec3, &DVec3)| {
+            let v = x - *y;
+            let d2 = v.length_squared();
+            let w = ns.dot(v).max(0.0) * normal.dot(-v).max(0.0) / (d2 * d2);
+            if w.is_finite() { w } else { 0.0 }
+        };
+        let pairs = || samples.iter().zip(self.sample_normals(n));
+        let total: f64 = pairs().map(weight).sum();
+        if !(total > 0.0) {
+            return samples[((u * samples.len() as f64) as usize).min(samples.len() - 1)];
+        }
+        let mut left = u * total;
+        for pair in pairs() {
+            let w = weight(pair);
+            if left < w {
+                return *pair.0;
+            }
+            left -= w;
+        }
+        // Rounding left `u · total` at or above the sum: the last sample of positive weight.
+        pairs()
+            .rev()
+            .find(|&p| weight(p) > 0.0)
+            .map_or(samples[0], |p| *p.0)
+    }
+
     /// The build parameters.
     pub fn params(&self) -> &FaceClusterParams {
         &self.params

@@ -1,7 +1,8 @@
 //! The final gather over the face-cluster tree (`reconstruction = "final-gather"`): exact against Howell's
 //! closed forms where every node is opened or the light is an emitter, within the point transfer's (R/r)²
 //! where a far node is gathered whole, a closed sphere's factors summing to one, a per-query cost that grows
-//! far slower than the faces, and the solver's answers in a furnace and across thread counts.
+//! far slower than the faces, the solver's answers in a furnace and across thread counts, and gathered
+//! values (a second bounce) as one Jacobi iteration with its work counted.
 
 mod common;
 use common::{params, solve, try_params};
@@ -11,7 +12,7 @@ use std::collections::HashMap;
 use glam::dvec3;
 use radlab_face_cluster::{
     ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
-    FaceContext,
+    FaceContext, GatherValues,
 };
 use radlab_scene::form_factor::closed_form::point_to_parallel_rectangle_corner as corner;
 use radlab_scene::{Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, builtin};
@@ -61,7 +62,7 @@ fn context(scene: &Scene) -> FaceContext<'_> {
 /// The top plate sends B = 1, the bottom nothing: the bottom's irradiance is Howell's factor to the top. At
 /// opening 0 every node is opened down to the faces, whose exact factors sum to Howell's (1e-12). At the
 /// default opening the top plate (bounding radius R ≈ 0.71 at distance r ≈ 10, R/r below the opening) is
-/// gathered whole by its power vector: one kernel evaluation instead of 64, within the point transfer's
+/// gathered whole by its power vector: one kernel evaluation and its four samples' weights instead of 64, within the point transfer's
 /// error, of order (R/r)² = 0.5% (measured +0.33% at all three points).
 #[test]
 fn a_far_plate_is_gathered_whole_within_its_point_transfer_error() {
@@ -97,7 +98,7 @@ fn a_far_plate_is_gathered_whole_within_its_point_transfer_error() {
             exact.kernel_evaluations() - k0,
             whole.kernel_evaluations() - k1,
         );
-        assert!(d1 + 63 <= d0, "{d1} kernel evaluations against {d0}");
+        assert!(d1 + 59 <= d0, "{d1} kernel evaluations against {d0}");
     }
 }
 
@@ -132,10 +133,89 @@ fn a_closed_sphere_fills_the_hemisphere() {
     );
 }
 
+/// Gathered values are one Jacobi iteration of the radiosity equation before the final gather. Inside a closed
+/// sphere of E = 1, ρ = 0.5 (a furnace: B = 2), every face given the value B₀ = 1: the inside's factors sum to
+/// one, so with every node opened one gather gives B₁ = E + ρ B₀ = 1.5 and a gather over values gathered first
+/// B₂ = E + ρ B₁ = 1.75 (1e-9). The values' gather is charged: before any query the regathered gather has
+/// counted exactly the kernel evaluations of one query at every face's centroid.
+#[test]
+fn gathered_values_are_one_jacobi_iteration_and_their_work_is_counted() {
+    let scene = builtin("furnace-sphere?tessellation=6&reflectance=0.5&emission=1").expect("scene");
+    let accel = Accel::new(&scene);
+    let ctx = context(&scene);
+    let ones = vec![Rgb::ONE; scene.face_count()];
+    let once = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5);
+    for f in 0..scene.face_count() {
+        once.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid);
+    }
+    let values_work = once.kernel_evaluations();
+    let twice = ClusterGather::regathered(&ctx, &accel, ones, HashMap::new(), (0.0, 0.0), 5);
+    assert_eq!(twice.kernel_evaluations(), values_work);
+    assert!(twice.rays() > 0);
+    for f in (0..scene.face_count()).step_by(17) {
+        let x = scene.faces[f].centroid;
+        let (b1, b2) = (
+            once.radiosity_at(&ctx, &accel, f, x).x,
+            twice.radiosity_at(&ctx, &accel, f, x).x,
+        );
+        assert!((b1 - 1.5).abs() <= 1e-9, "face {f}: one gather {b1}");
+        assert!((b2 - 1.75).abs() <= 1e-9, "face {f}: two gathers {b2}");
+    }
+}
+
+/// A far node's visibility ray goes to a sample drawn in proportion to the point kernel toward the query
+/// point: over an even grid of 100,000 draws each sample of a terrain node is chosen with frequency w_s / Σ w
+/// (within 2e-5), a sample whose face turns away from the point or lies behind its plane never, and where
+/// every weight is 0 the draws spread evenly.
+#[test]
+fn far_visibility_samples_follow_the_point_kernel() {
+    let scene = builtin("terrain?faces=2000&octaves=4").expect("scene");
+    let tree = FaceClusterTree::build(&scene, &FaceClusterParams::default()).expect("tree");
+    let x = scene.faces[7].centroid;
+    let normal = scene.faces[7].normal;
+    let draws = 100_000;
+    let mut checked = 0;
+    for m in (0..tree.nodes().len()).step_by(41) {
+        let (samples, normals) = (tree.samples(m), tree.sample_normals(m));
+        let w: Vec<f64> = samples
+            .iter()
+            .zip(normals)
+            .map(|(y, ns)| {
+                let v = x - *y;
+                ns.dot(v).max(0.0) * normal.dot(-v).max(0.0) / v.length_squared().powi(2)
+            })
+            .collect();
+        let total: f64 = w.iter().sum();
+        let mut count = vec![0usize; samples.len()];
+        for i in 0..draws {
+            let y = tree.sample_toward(m, x, normal, (i as f64 + 0.5) / draws as f64);
+            count[samples.iter().position(|s| *s == y).expect("a sample")] += 1;
+        }
+        for (s, (&c, &ws)) in count.iter().zip(&w).enumerate() {
+            let want = if total > 0.0 {
+                ws / total
+            } else {
+                1.0 / samples.len() as f64
+            };
+            let got = c as f64 / draws as f64;
+            assert!(
+                (got - want).abs() <= 2e-5,
+                "node {m}, sample {s}: drawn {got}, kernel share {want}"
+            );
+            if total > 0.0 && ws == 0.0 {
+                assert_eq!(c, 0);
+            }
+        }
+        checked += usize::from(total > 0.0 && w.contains(&0.0));
+    }
+    assert!(checked > 0, "no node had a sample turned away");
+}
+
 /// Kernel evaluations per query on one 4-octave terrain tessellated at 2,000 and 32,000 faces, every face
-/// sending B = 1: the tree gather's grow by less than 2.5 (measured 1.94, from 180 to 350; a release probe
-/// went on to 458 and 567 at 128,000 and 512,000 faces, about 100 more per × 4, as log k), the flat
-/// gather's (opening 0) by more than 8 (measured 12.6: it visits every face in front of the point).
+/// sending B = 1: the tree gather's grow by less than 2.5 (measured 2.11, from 475 to 1,000, counting the
+/// four sample weights of each far node; 1.94, from 180 to 350, without them, where a release probe went on to
+/// 458 and 567 at 128,000 and 512,000 faces, about 100 more per × 4, as log k), the flat gather's (opening 0)
+/// by more than 8 (measured 12.6: it visits every face in front of the point).
 #[test]
 fn work_per_query_grows_far_slower_than_the_faces() {
     let per_query = |k: usize, opening: f64| {
@@ -197,12 +277,13 @@ fn direct_light_from_an_emitter_is_exact_at_every_opening() {
 
 /// Concentric spheres, every face E = 1 and ρ = 0.5, a furnace: B = 2 everywhere. The final gather at every
 /// face's centroid, over the solve at ε = 1e-3 with one ray per link, has an area mean within 1% of 2
-/// (measured 2.0038) and the same bits on one and two threads.
+/// (measured 2.0036; 2.0004 over gathered values) and the same bits on one and two threads, over the
+/// solution's values and over gathered ones.
 #[test]
 fn final_gather_holds_the_furnace_on_any_thread_count() {
     let scene = builtin("concentric-spheres?faces=600&reflectance=0.5").expect("scene");
     let accel = Accel::new(&scene);
-    let run = |threads: usize| {
+    let run = |threads: usize, values: &str| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -212,21 +293,27 @@ fn final_gather_holds_the_furnace_on_any_thread_count() {
                 ("reconstruction", "final-gather"),
                 ("epsilon", "0.001"),
                 ("visibility", "centre"),
+                ("gather_values", values),
             ]);
             let mut s = FaceClusterSolver::new(&scene, &accel, p, 3).expect("solver");
             solve(&mut s);
             s.face_radiosity()
         })
     };
-    let (one, two) = (run(1), run(2));
-    let total: f64 = one.iter().map(|x| x.1).sum();
-    let mean = one.iter().map(|x| x.1 * x.2.x).sum::<f64>() / total;
-    assert!((mean - 2.0).abs() <= 0.02, "area-mean B = {mean}, want 2");
-    for (a, b) in one.iter().zip(&two) {
-        assert_eq!(
-            a.2.to_array().map(f64::to_bits),
-            b.2.to_array().map(f64::to_bits)
+    for values in ["\"solution\"", "\"gathered\""] {
+        let (one, two) = (run(1, values), run(2, values));
+        let total: f64 = one.iter().map(|x| x.1).sum();
+        let mean = one.iter().map(|x| x.1 * x.2.x).sum::<f64>() / total;
+        assert!(
+            (mean - 2.0).abs() <= 0.02,
+            "{values}: area-mean B = {mean}, want 2"
         );
+        for (a, b) in one.iter().zip(&two) {
+            assert_eq!(
+                a.2.to_array().map(f64::to_bits),
+                b.2.to_array().map(f64::to_bits)
+            );
+        }
     }
 }
 
@@ -249,5 +336,49 @@ fn an_opening_outside_zero_to_one_or_without_a_final_gather_is_refused() {
     );
     let ok = params(&[("reconstruction", "final-gather"), ("gather_opening", "0")]);
     assert_eq!(ok.gather_opening, 0.0);
+    assert!(ok.validate().is_ok());
+}
+
+/// Gathered values' parameters: `gather_values` takes solution or gathered and only with final-gather answers;
+/// `values_opening` lies in [0, 1) and only with gathered values. Each refusal names its key and the fix.
+#[test]
+fn gathered_values_parameters_are_checked() {
+    let refused = |pairs: &[(&str, &str)]| try_params(pairs).expect_err("refused").to_string();
+    let fg = ("reconstruction", "final-gather");
+    let err = refused(&[fg, ("gather_values", "\"twice\"")]);
+    assert!(
+        err.contains("gather_values") && err.contains("solution or gathered"),
+        "{err}"
+    );
+    let err = refused(&[("gather_values", "\"gathered\"")]);
+    assert!(
+        err.contains("gather_values") && err.contains("final-gather"),
+        "{err}"
+    );
+    let err = refused(&[fg, ("values_opening", "0.3")]);
+    assert!(
+        err.contains("values_opening") && err.contains("gather_values = \"gathered\""),
+        "{err}"
+    );
+    for bad in ["1", "-0.5", "\"coarse\""] {
+        let err = refused(&[
+            fg,
+            ("gather_values", "\"gathered\""),
+            ("values_opening", bad),
+        ]);
+        assert!(
+            err.contains("values_opening") && err.contains("[0, 1)"),
+            "{bad}: {err}"
+        );
+    }
+    let ok = params(&[
+        fg,
+        ("gather_values", "\"gathered\""),
+        ("values_opening", "0.25"),
+    ]);
+    assert_eq!(
+        (ok.gather_values, ok.values_opening),
+        (GatherValues::Gathered, 0.25)
+    );
     assert!(ok.validate().is_ok());
 }
