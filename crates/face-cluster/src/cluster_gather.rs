@@ -164,11 +164,10 @@ impl ClusterGather {
     }
 
     /// The same gather over values that are themselves this gather's answers at every face's centroid (and,
-    /// where the refinement split a face, at every patch leaf's centroid), the values' gather at
-    /// `values_opening` reading split faces by their leaves, emitters whole; its rays and kernel evaluations
-    /// are charged to the new gather
-    /// ([`GatherValues::Gathered`]). Each query draws from its own stream (seed, point), so the values do not
-    /// depend on the number of threads.
+    /// where the refinement split a face, at every patch leaf's centroid): [`GatherValues::Gathered`]. The
+    /// values' gather, at `values_opening`, reads split faces by their leaves and emitters whole; its rays and
+    /// kernel evaluations are charged to the new gather. Each query draws from its own stream (seed, point),
+    /// so the values do not depend on the number of threads.
     pub fn regathered(
         ctx: &FaceContext<'_>,
         accel: &Accel,
@@ -318,9 +317,9 @@ impl ClusterGather {
             if sent.max_element() <= 0.0 {
                 continue;
             }
-            // A sample facing x (any sample where none does): the fit already gives the faces turned away
-            // from x nothing, so a ray from behind them must not count that again as occlusion.
-            // The draw weighs each sample by its point kernel: those are kernel evaluations too.
+            // A sample drawn by its point kernel, so never one whose face turns away from x (unless all do):
+            // the fit already gives such faces nothing, and a ray from behind them must not count that again
+            // as occlusion. The weights are kernel evaluations too.
             kernels += tree.samples(m).len() as u64;
             let y = tree.sample_toward(m, point, n, sampling::uniform(&mut r));
             rays += 1;
