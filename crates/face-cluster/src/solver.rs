@@ -210,12 +210,12 @@ impl MethodParams for FaceClusterSolveParams {
     fn validate(&self) -> Result<(), SolveError> {
         self.engine.validate()?;
         opening_in_range(
-            "gather_opening",
+            ("gather_opening", DEFAULT_OPENING),
             self.gather_opening,
             &self.gather_opening.to_string(),
         )?;
         opening_in_range(
-            "values_opening",
+            ("values_opening", DEFAULT_VALUES_OPENING),
             self.values_opening,
             &self.values_opening.to_string(),
         )?;
@@ -355,16 +355,11 @@ impl MethodParams for FaceClusterSolveParams {
     }
 }
 
-/// `x` (written `shown`) as the opening `key`: in [0, 1), else an error naming `key`.
-fn opening_in_range(key: &str, x: f64, shown: &str) -> Result<(), SolveError> {
+/// `x` (written `shown`) as the opening `key`: in [0, 1), else an error naming `key` and its `default`.
+fn opening_in_range((key, default): (&str, f64), x: f64, shown: &str) -> Result<(), SolveError> {
     if (0.0..1.0).contains(&x) {
         return Ok(());
     }
-    let default = if key == "values_opening" {
-        DEFAULT_VALUES_OPENING
-    } else {
-        DEFAULT_OPENING
-    };
     Err(SolveError::param(
         key,
         format!(
@@ -382,7 +377,7 @@ fn opening(table: &mut toml::Table, key: &str, default: f64) -> Result<f64, Solv
                 .as_float()
                 .or_else(|| v.as_integer().map(|i| i as f64))
                 .unwrap_or(f64::NAN);
-            opening_in_range(key, x, &v.to_string())?;
+            opening_in_range((key, default), x, &v.to_string())?;
             Ok(x)
         }
     }

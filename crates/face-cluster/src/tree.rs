@@ -321,30 +321,29 @@ impl FaceClusterTree {
     /// is the kernel-weighted mean over the samples; evenly among all samples where every weight is 0.
     pub fn sample_toward(&self, n: usize, x: DVec3, normal: DVec3, u: f64) -> DVec3 {
         let samples = self.samples(n);
-        let weight = |(y, ns): (&DVec3, &DVec3)| {
+        // Each sample's kernel once (at most MAX_SAMPLES_PER_NODE of them), then the draw over them.
+        let mut weights = [0.0; FaceClusterParams::MAX_SAMPLES_PER_NODE];
+        let weights = &mut weights[..samples.len()];
+        for ((w, y), ns) in weights.iter_mut().zip(samples).zip(self.sample_normals(n)) {
             let v = x - *y;
             let d2 = v.length_squared();
-            let w = ns.dot(v).max(0.0) * normal.dot(-v).max(0.0) / (d2 * d2);
-            if w.is_finite() { w } else { 0.0 }
-        };
-        let pairs = || samples.iter().zip(self.sample_normals(n));
-        let total: f64 = pairs().map(weight).sum();
+            let k = ns.dot(v).max(0.0) * normal.dot(-v).max(0.0) / (d2 * d2);
+            *w = if k.is_finite() { k } else { 0.0 };
+        }
+        let total: f64 = weights.iter().sum();
         if !(total > 0.0) {
             return samples[((u * samples.len() as f64) as usize).min(samples.len() - 1)];
         }
         let mut left = u * total;
-        for pair in pairs() {
-            let w = weight(pair);
+        for (y, &w) in samples.iter().zip(weights.iter()) {
             if left < w {
-                return *pair.0;
+                return *y;
             }
             left -= w;
         }
         // Rounding left `u · total` at or above the sum: the last sample of positive weight.
-        pairs()
-            .rev()
-            .find(|&p| weight(p) > 0.0)
-            .map_or(samples[0], |p| *p.0)
+        let last = weights.iter().rposition(|&w| w > 0.0).unwrap_or(0);
+        samples[last]
     }
 
     /// The build parameters.
