@@ -5,7 +5,9 @@
 //! - at each input face below r (an oriented cluster receiver hands each face its own share, Smits, Arvo &
 //!   Greenberg 1994), then pushed within the face;
 //! - at the shallowest nodes below r that the transport resolves, or the input faces where none on the way
-//!   does ([`GatherAt::Descend`]), then pushed below;
+//!   does ([`GatherAt::Descend`]), then pushed below. These landings are found top down from r, once per
+//!   rebuild of a changed r ([`Frontier`]), so a link costs its frontier (on a smooth surface about √m of a
+//!   receiver's m faces), not a test at every node below r;
 //! - at each leaf below r, with the kernel integrated over the leaf itself:
 //!   H_leaf = Σ_{(a←s), a ∋ leaf} V_as F_{leaf→s} B_s, F_{leaf→s} by the leaf's own Gauss points. The sources
 //!   on a leaf's path partition what its face sees, so the exact point-to-polygon factors sum to the point's
@@ -38,7 +40,46 @@ use crate::link::{Link, kernel_mean};
 use crate::node::NodeKind;
 use crate::transport::{GatherAt, Transport};
 
+/// Where the descending links of changed receivers land this rebuild, found top down from each receiver
+/// (through the clusters that pass them on, stopping at those that resolve them and at input faces), so a
+/// link costs what its frontier holds, not what lies below its receiver.
+pub(crate) struct Frontier {
+    /// (target, receiver, link index), by target.
+    landings: Vec<(u32, u32, u32)>,
+    /// Receivers below which a node above the faces was split since the last rebuild: their descending
+    /// links' landings were found again.
+    regrown: Vec<bool>,
+}
+
+impl Frontier {
+    /// The landings on target `t`.
+    fn at(&self, t: u32) -> &[(u32, u32, u32)] {
+        let lo = self.landings.partition_point(|e| e.0 < t);
+        let hi = self.landings.partition_point(|e| e.0 <= t);
+        &self.landings[lo..hi]
+    }
+}
+
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
+    /// The nodes where receiver `a`'s descending link `l` (index `k`) is evaluated: the shallowest nodes
+    /// strictly below `a` that the transport resolves it at, or the input faces where none on the way does.
+    fn landings(&self, a: u32, k: u32, l: &Link, out: &mut Vec<(u32, u32, u32)>) {
+        let src = &self.nodes[l.source as usize];
+        let (first, count) = self.children[a as usize];
+        let mut stack: Vec<u32> = (first..first + count).rev().collect();
+        while let Some(c) = stack.pop() {
+            let node = &self.nodes[c as usize];
+            if self.is_face_target(c)
+                || (node.face().is_none() && self.kernel.resolves(node, src, l))
+            {
+                out.push((c, a, k));
+            } else if node.face().is_none() {
+                let (first, count) = self.children[c as usize];
+                stack.extend((first..first + count).rev());
+            }
+        }
+    }
+
     /// Whether node `t` is the input-face target of [`GatherAt::Faces`] links from above it.
     fn is_face_target(&self, t: u32) -> bool {
         let p = self.parent[t as usize];
@@ -48,30 +89,46 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     /// The row of target `t`: its own links, and the links of its ancestors that distribute to it. Entries
     /// of ancestors whose links have not changed are kept from `old` (the row as last built, valid unless `t`
-    /// itself changed); the rest are evaluated. Returns the row and the number of kernel evaluations it took.
+    /// itself changed; a descending link's entries are kept even then, unless a cluster below its receiver
+    /// was split, since where it lands depends only on the clusters between); the rest are evaluated, the
+    /// descending links' at the targets `descend` found for `t`. Returns the row and the number of kernel
+    /// evaluations it took.
     fn build_row(
         &self,
         t: u32,
         old: &[RowEntry<T::Coefficient>],
         below: &[Option<Vec<GatherAt>>],
+        descend: &Frontier,
         reuse: &[bool],
     ) -> (Vec<RowEntry<T::Coefficient>>, u64) {
         let node = &self.nodes[t as usize];
         let leaf = self.children[t as usize].1 == 0;
         let within_face = node.face().is_some();
         let renew = self.dirty[t as usize];
-        let mut row: Vec<RowEntry<T::Coefficient>> = if renew {
-            Vec::new()
-        } else {
-            old.iter()
-                .filter(|(r, _, _)| !self.dirty[*r as usize])
-                .copied()
-                .collect()
+        let descends = |r: u32, k: u32| {
+            below[r as usize]
+                .as_ref()
+                .is_some_and(|m| m[k as usize] == GatherAt::Descend)
         };
+        let mut row: Vec<RowEntry<T::Coefficient>> = old
+            .iter()
+            .filter(|&&(r, k, _)| {
+                !self.dirty[r as usize]
+                    && if descends(r, k) {
+                        !descend.regrown[r as usize]
+                    } else {
+                        !renew
+                    }
+            })
+            .copied()
+            .collect();
         // The old entries of changed nodes whose links can be told apart by source, by (node, source).
         let mut kept: Vec<(u32, u32, T::Coefficient)> = old
             .iter()
-            .filter(|(r, _, _)| (renew || self.dirty[*r as usize]) && reuse[*r as usize])
+            .filter(|(r, _, _)| {
+                (renew || self.dirty[*r as usize] || descend.regrown[*r as usize])
+                    && reuse[*r as usize]
+            })
             .filter_map(|&(r, k, c)| {
                 let s = *self.row_sources.get(r as usize)?.get(k as usize)?;
                 Some((r, s, c))
@@ -87,6 +144,18 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 .map(|i| kept[i].2)
         };
         let mut evaluations = 0;
+        let mut evaluate = |row: &mut Vec<RowEntry<T::Coefficient>>, a: u32, k: u32, l: &Link| {
+            let c = find(a, l.source).unwrap_or_else(|| {
+                evaluations += 1;
+                self.kernel
+                    .coefficient(node, &self.nodes[l.source as usize], l, false)
+            });
+            row.push((a, k, c));
+        };
+        // Descending links of changed receivers above t that land on t.
+        for &(_, a, k) in descend.at(t) {
+            evaluate(&mut row, a, k, &self.links[a as usize][k as usize]);
+        }
         if renew {
             for (k, l) in self.links[t as usize].iter().enumerate() {
                 if l.overlap {
@@ -106,10 +175,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
         }
         let face_target = self.is_face_target(t);
-        // Nodes above the faces are targets of the descending links of their ancestors.
-        if leaf || face_target || !within_face {
-            // The ancestors passed so far: the nodes strictly between the current ancestor and t.
-            let mut between: Vec<u32> = Vec::new();
+        if leaf || face_target {
             let mut a = self.parent[t as usize];
             while a != NONE {
                 if let Some(modes) = &below[a as usize]
@@ -117,34 +183,17 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 {
                     let recv = &self.nodes[a as usize];
                     for ((k, l), mode) in self.links[a as usize].iter().enumerate().zip(modes) {
-                        if l.overlap {
-                            continue;
-                        }
-                        let src = &self.nodes[l.source as usize];
-                        let here = match mode {
-                            GatherAt::Receiver => false,
-                            GatherAt::Faces => face_target && recv.face().is_none(),
-                            GatherAt::Leaves => leaf,
-                            // The shallowest resolving node, or the face if none above it resolves.
-                            GatherAt::Descend => {
-                                recv.face().is_none()
-                                    && (face_target
-                                        || (!within_face && self.kernel.resolves(node, src, l)))
-                                    && !between.iter().any(|&b| {
-                                        self.kernel.resolves(&self.nodes[b as usize], src, l)
-                                    })
-                            }
-                        };
+                        let here = !l.overlap
+                            && match mode {
+                                GatherAt::Receiver | GatherAt::Descend => false,
+                                GatherAt::Faces => face_target && recv.face().is_none(),
+                                GatherAt::Leaves => leaf,
+                            };
                         if here {
-                            let c = find(a, l.source).unwrap_or_else(|| {
-                                evaluations += 1;
-                                self.kernel.coefficient(node, src, l, false)
-                            });
-                            row.push((a, k as u32, c));
+                            evaluate(&mut row, a, k as u32, l);
                         }
                     }
                 }
-                between.push(a);
                 a = self.parent[a as usize];
             }
         }
@@ -193,16 +242,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     }
 
     /// Rebuilds the source rows of receivers whose links changed, and of links whose source's subtree
-    /// was split since the last build; clears the split marks.
-    fn rebuild_source_rows(&mut self) {
+    /// (`grown`) was split since the last build.
+    fn rebuild_source_rows(&mut self, grown: &[bool]) {
         let n = self.nodes.len();
-        let mut grown = std::mem::take(&mut self.split_since);
-        for i in (0..n).rev() {
-            let p = self.parent[i];
-            if grown[i] && p != NONE {
-                grown[p as usize] = true;
-            }
-        }
         let todo: Vec<u32> = (0..n as u32)
             .filter(|&r| {
                 self.dirty[r as usize]
@@ -236,22 +278,27 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             self.source_rows[r as usize] = rows;
             self.form_factors += evaluations;
         }
-        grown.iter_mut().for_each(|g| *g = false);
-        self.split_since = grown;
     }
 
     /// Rebuilds the rows of targets whose path has a changed node; clears the marks.
     pub(crate) fn rebuild_rows(&mut self) {
-        self.rebuild_source_rows();
         let n = self.nodes.len();
-        // A node is stale if it or an ancestor is dirty (parents precede children).
-        let mut stale = self.dirty.clone();
-        for i in 0..n {
+        // Nodes below which a node was split since the last build, and (`regrown`) a node above the faces
+        // (which may move where descending links from above it land).
+        let mut grown = std::mem::take(&mut self.split_since);
+        let mut regrown: Vec<bool> = (0..n)
+            .map(|i| grown[i] && self.nodes[i].face().is_none())
+            .collect();
+        for i in (0..n).rev() {
             let p = self.parent[i];
-            if p != NONE && stale[p as usize] {
-                stale[i] = true;
+            if p != NONE {
+                grown[p as usize] |= grown[i];
+                regrown[p as usize] |= regrown[i];
             }
         }
+        self.rebuild_source_rows(&grown);
+        grown.iter_mut().for_each(|g| *g = false);
+        self.split_since = grown;
         // Where each link is evaluated, for the nodes with links evaluated below them (asked once per
         // rebuild, not at every target below).
         let below: Vec<Option<Vec<GatherAt>>> = (0..n)
@@ -271,6 +318,24 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 distributes.then_some(modes)
             })
             .collect();
+        // Only the descending links of a regrown node need their landings found again.
+        for (a, r) in regrown.iter_mut().enumerate() {
+            *r = *r
+                && below[a].as_ref().is_some_and(|modes| {
+                    self.links[a]
+                        .iter()
+                        .zip(modes)
+                        .any(|(l, m)| !l.overlap && *m == GatherAt::Descend)
+                })
+        }
+        // A node is stale if it or an ancestor is dirty or regrown (parents precede children).
+        let mut stale: Vec<bool> = (0..n).map(|i| self.dirty[i] || regrown[i]).collect();
+        for i in 0..n {
+            let p = self.parent[i];
+            if p != NONE && stale[p as usize] {
+                stale[i] = true;
+            }
+        }
         // Changed nodes whose old and new links can be told apart by source (a node's links have distinct
         // sources unless a transport links a pair twice; then its entries are evaluated again).
         let distinct = |s: &mut Vec<u32>| {
@@ -287,10 +352,31 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 !self.dirty[a] || (distinct(&mut prev.clone()) && distinct(&mut now))
             })
             .collect();
+        // Where the descending links of changed receivers land.
+        let mut landings: Vec<(u32, u32, u32)> = (0..n as u32)
+            .into_par_iter()
+            .filter(|&a| {
+                (self.dirty[a as usize] || regrown[a as usize])
+                    && self.nodes[a as usize].face().is_none()
+            })
+            .flat_map_iter(|a| {
+                let mut out = Vec::new();
+                if let Some(modes) = &below[a as usize] {
+                    for ((k, l), mode) in self.links[a as usize].iter().enumerate().zip(modes) {
+                        if !l.overlap && *mode == GatherAt::Descend {
+                            self.landings(a, k as u32, l, &mut out);
+                        }
+                    }
+                }
+                out
+            })
+            .collect();
+        landings.par_sort_unstable();
+        let descend = Frontier { landings, regrown };
         let todo: Vec<u32> = (0..n as u32).filter(|&i| stale[i as usize]).collect();
         let built: Vec<(Vec<RowEntry<T::Coefficient>>, u64)> = todo
             .par_iter()
-            .map(|&t| self.build_row(t, &self.rows[t as usize], &below, &reuse))
+            .map(|&t| self.build_row(t, &self.rows[t as usize], &below, &descend, &reuse))
             .collect();
         for (t, (row, evaluations)) in todo.into_iter().zip(built) {
             self.rows[t as usize] = row;

@@ -58,6 +58,12 @@
 //!   at 1e4, 13.0 M at 3e4); held 907 → 567 MiB at 1e4, 1,840 MiB at 3e4. Fitted slope 1.07 over 1e3–3e4
 //!   (1.15 from 3e3 to 1e4, 1.18 from 1e4 to 3e4), within its target (≤ 1.2). On the furnace (ρ = 0.5,
 //!   B = 2) the area mean moved from +0.14 / +0.35 / +0.32% to +0.04 / +0.16 / +0.02%.
+//! - Where a straddled link lands below its receiver is found top down, once per rebuild (radlab-hierarchical's
+//!   frontier), instead of by a cone test at every node of the receiver's subtree (same command, directional,
+//!   old and new binaries one after the other, idle machine, 2026-12-02): 273.7 → 280.5 / 265.6 s at 3e4 (noise),
+//!   1,401 → 1,160 s at 1e5; links, evaluations, rays and radiosities unchanged. Fitted slope over 1e3–1e5 of
+//!   the new series 1.112, 1.17–1.22 from 3e4 to 1e5 (old: 1.35 that day): above its target (≤ 1.05), the
+//!   rest being rays whose cost grows with the BVH.
 //!
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`
