@@ -8,6 +8,9 @@
 //!   bumpy sphere in its closed room with 10⁵ and 10⁶ triangles.
 //!   Closest hit is also timed with the presets in alternation (printed), which a shared machine's drifting
 //!   load cannot bias.
+//! - The two BVH node tests (`NodeTestKind`: obvhs's SSE test and the eight-lane AVX2 one) of the default
+//!   preset in alternation, after checking that they give the same answers and visit the same nodes
+//!   (printed).
 //! - The 2-thread speed-up of closest hit and visibility (default preset, rays split into chunks over a rayon
 //!   pool of 1 and then 2 threads, in alternation; printed), and the ray count, which must be the same.
 //! - BVH build time of the bumpy sphere with 10⁶ triangles on pools of 1 and 2 threads (`Fast` and `VeryFast`).
@@ -32,7 +35,7 @@ use std::time::Instant;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
 use radlab_scene::sampling::{self, Rng};
-use radlab_scene::{Accel, AccelPreset, FaceId, Ray, Scene, builtin};
+use radlab_scene::{Accel, AccelPreset, FaceId, NodeTestKind, Ray, Scene, builtin};
 use rayon::prelude::*;
 
 const PRESETS: [AccelPreset; 4] = [
@@ -236,6 +239,77 @@ fn interleaved_comparison(name: &str, accels: &[Accel], w: &Workload) {
     );
 }
 
+/// The two node tests ([`NodeTestKind`]) of one BVH side by side: first the same answers on every ray (face
+/// and distance bit for bit, visibility, nodes and triangles visited), then closest-hit and visibility rays
+/// per second of each, timed in alternation (median of 9 rounds), and their ratio.
+fn node_test_comparison(name: &str, scene: &Scene, w: &Workload) {
+    let portable = {
+        let mut a = Accel::new(scene);
+        a.set_node_test(NodeTestKind::Portable);
+        a
+    };
+    let mut avx2 = Accel::new(scene);
+    if !avx2.set_node_test(NodeTestKind::Avx2) {
+        eprintln!("{name}: no AVX2 on this processor; node tests not compared");
+        return;
+    }
+    let accels = [portable, avx2];
+    for &(f, x, d) in &w.bounces {
+        let [a, b] = accels.each_ref().map(|a| {
+            let (h, c) = a.intersect_counting(&Ray::new(x, d));
+            (
+                a.intersect_from(f, x, d).map(|h| (h.face, h.t.to_bits())),
+                h.map(|h| (h.face, h.t.to_bits())),
+                c,
+            )
+        });
+        assert_eq!(a, b, "{name}: node tests disagree on a closest-hit ray");
+    }
+    for &(p, fp, q, fq) in &w.segments {
+        let [a, b] = accels
+            .each_ref()
+            .map(|a| (a.visible_between(p, fp, q, fq), a.visible_counting(p, q)));
+        assert_eq!(a, b, "{name}: node tests disagree on a segment");
+    }
+    let rounds = 9;
+    let mut rates: [[Vec<f64>; 2]; 2] = Default::default();
+    for _ in 0..rounds {
+        for (k, a) in accels.iter().enumerate() {
+            let t = Instant::now();
+            let mut faces = 0usize;
+            for &(f, x, d) in &w.bounces {
+                if let Some(h) = a.intersect_from(f, x, d) {
+                    faces += h.face;
+                }
+            }
+            black_box(faces);
+            rates[0][k].push(w.bounces.len() as f64 / t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            let seen = w
+                .segments
+                .iter()
+                .filter(|&&(p, fp, q, fq)| a.visible_between(p, fp, q, fq))
+                .count();
+            black_box(seen);
+            rates[1][k].push(w.segments.len() as f64 / t.elapsed().as_secs_f64());
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (test, r) in ["closest hit", "visibility"].iter().zip(&mut rates) {
+        let (portable, avx2) = (median(&mut r[0]), median(&mut r[1]));
+        eprintln!(
+            "{name}: {test}, node tests in alternation, median of {rounds} rounds: Portable {:.3} M rays/s, \
+             Avx2 {:.3} M rays/s ({:.2}×), same answers",
+            portable / 1e6,
+            avx2 / 1e6,
+            avx2 / portable
+        );
+    }
+}
+
 /// Rays per second of the default preset on pools of 1 and 2 threads, in alternation (median of each), and
 /// the speed-up; also checks that the ray count does not depend on the number of threads.
 fn thread_scaling(name: &str, a: &Accel, w: &Workload) {
@@ -329,6 +403,7 @@ fn bench_scene(c: &mut Criterion, name: &str, spec: &str) {
     }
     check_answers(name, &scene, &accels, &w);
     interleaved_comparison(name, &accels, &w);
+    node_test_comparison(name, &scene, &w);
     thread_scaling(name, &accels[0], &w);
 
     let mut g = c.benchmark_group(format!("closest_hit/{name}"));

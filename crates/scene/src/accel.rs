@@ -28,6 +28,10 @@
 //! - The hit point must lie in the triangle within τ (edge functions in f64), so rays through shared edges and
 //!   quad diagonals hit one of the neighbours rather than slipping between them.
 //!
+//! The BVH's node test (the slab test of a node's eight children) is obvhs's SSE test, or, where the processor
+//! has AVX2, the same arithmetic in eight lanes ([`NodeTestKind`]): the same hit masks bit for bit, so the same
+//! traversal and answers either way.
+//!
 //! The distance of a hit is therefore exact to f64 rounding, and surfaces a millionth of the scene's size
 //! apart are told apart at any scale. Quads are split into two triangles; each triangle maps back to its face.
 //! Every ray cast is counted, exactly and whatever the number of threads, so solvers can report rays in
@@ -46,6 +50,7 @@ use obvhs::{
 
 use rayon::prelude::*;
 
+use crate::wide_node_test::{NodeTest, Portable};
 use crate::{FaceId, Scene};
 
 /// A ray with unit direction and a maximum distance.
@@ -124,6 +129,17 @@ impl AccelPreset {
             AccelPreset::Quality => BvhBuildParams::very_slow_build(),
         }
     }
+}
+
+/// The ray–box test of the BVH's 8-wide nodes. Both give the same hit masks, bit for bit, so the same
+/// answers and traversal costs; they differ only in speed. [`Accel::new`] takes `Avx2` where the processor
+/// has it; benchmarks switch with [`Accel::set_node_test`] to time the two side by side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeTestKind {
+    /// obvhs's own test: SSE, four children at a time, its 8-bit planes converted one by one.
+    Portable,
+    /// All eight children in AVX2 lanes, the planes widened in one instruction per set.
+    Avx2,
 }
 
 /// Plane tolerance τ relative to the scene's bounding diagonal. A point within τ of a triangle's plane lies on
@@ -262,6 +278,8 @@ pub struct Accel {
     tol: f64,
     rays: RayCounter,
     build_time: Duration,
+    /// The eight-lane AVX2 node test, when traversals use it (same answers, bit for bit).
+    avx2: Option<crate::wide_node_test::Avx2Test>,
 }
 
 impl std::fmt::Debug for Accel {
@@ -484,7 +502,29 @@ impl Accel {
             tol: PLANE_TOL_REL * scale,
             rays: RayCounter::new(),
             build_time,
+            avx2: crate::wide_node_test::avx2_test(),
         }
+    }
+
+    /// The node test traversals use.
+    pub fn node_test(&self) -> NodeTestKind {
+        if self.avx2.is_some() {
+            NodeTestKind::Avx2
+        } else {
+            NodeTestKind::Portable
+        }
+    }
+
+    /// Chooses the node test; returns false, and keeps the current one, if the processor lacks AVX2.
+    pub fn set_node_test(&mut self, kind: NodeTestKind) -> bool {
+        self.avx2 = match kind {
+            NodeTestKind::Portable => None,
+            NodeTestKind::Avx2 => match crate::wide_node_test::avx2_test() {
+                Some(test) => Some(test),
+                None => return false,
+            },
+        };
+        true
     }
 
     /// The plane tolerance τ in scene units ([`PLANE_TOL_REL`] × the scene's diagonal).
@@ -614,6 +654,30 @@ impl Accel {
         tmax: f64,
         skip: FaceId,
     ) -> (Option<Hit>, TraversalCost) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(test) = self.avx2 {
+            // The traversal compiled with AVX2 enabled, around its eight-lane node test.
+            return test.0.vectorize(Closest {
+                accel: self,
+                test,
+                origin,
+                dir,
+                tmax,
+                skip,
+            });
+        }
+        self.closest_with(Portable, origin, dir, tmax, skip)
+    }
+
+    #[inline(always)]
+    fn closest_with<T: NodeTest>(
+        &self,
+        test: T,
+        origin: DVec3,
+        dir: DVec3,
+        tmax: f64,
+        skip: FaceId,
+    ) -> (Option<Hit>, TraversalCost) {
         let mut cost = TraversalCost::default();
         if !(origin.is_finite() && dir.is_finite()) {
             debug_assert!(
@@ -638,7 +702,7 @@ impl Accel {
             state,
             {
                 cost.nodes += 1;
-                node.intersect_ray(&ray, state.oct_inv4)
+                test.hits(node, &ray, state.oct_inv4)
             },
             {
                 cost.triangles += 1;
@@ -774,6 +838,30 @@ impl Accel {
         fp: FaceId,
         fq: FaceId,
     ) -> (bool, TraversalCost) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(test) = self.avx2 {
+            // The traversal compiled with AVX2 enabled, around its eight-lane node test.
+            return test.0.vectorize(Visible {
+                accel: self,
+                test,
+                p,
+                q,
+                fp,
+                fq,
+            });
+        }
+        self.visible_with(Portable, p, q, fp, fq)
+    }
+
+    #[inline(always)]
+    fn visible_with<T: NodeTest>(
+        &self,
+        test: T,
+        p: DVec3,
+        q: DVec3,
+        fp: FaceId,
+        fq: FaceId,
+    ) -> (bool, TraversalCost) {
         let mut cost = TraversalCost::default();
         let d = q - p;
         let len = d.length();
@@ -798,7 +886,7 @@ impl Accel {
                 state,
                 {
                     cost.nodes += 1;
-                    node.intersect_ray(&ray, state.oct_inv4)
+                    test.hits(node, &ray, state.oct_inv4)
                 },
                 {
                     cost.triangles += 1;
@@ -840,6 +928,65 @@ impl Accel {
             );
         }
         (visible, cost)
+    }
+}
+
+/// A closest-hit traversal with the AVX2 node test, for `V3::vectorize` (which compiles what it calls with
+/// AVX2 enabled; `call` is inlined into it).
+#[cfg(target_arch = "x86_64")]
+struct Closest<'a> {
+    accel: &'a Accel,
+    test: crate::wide_node_test::Avx2,
+    origin: DVec3,
+    dir: DVec3,
+    tmax: f64,
+    skip: FaceId,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl pulp::NullaryFnOnce for Closest<'_> {
+    type Output = (Option<Hit>, TraversalCost);
+
+    #[inline(always)]
+    fn call(self) -> Self::Output {
+        let Self {
+            accel,
+            test,
+            origin,
+            dir,
+            tmax,
+            skip,
+        } = self;
+        accel.closest_with(test, origin, dir, tmax, skip)
+    }
+}
+
+/// A visibility traversal with the AVX2 node test, for `V3::vectorize` (as [`Closest`]).
+#[cfg(target_arch = "x86_64")]
+struct Visible<'a> {
+    accel: &'a Accel,
+    test: crate::wide_node_test::Avx2,
+    p: DVec3,
+    q: DVec3,
+    fp: FaceId,
+    fq: FaceId,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl pulp::NullaryFnOnce for Visible<'_> {
+    type Output = (bool, TraversalCost);
+
+    #[inline(always)]
+    fn call(self) -> Self::Output {
+        let Self {
+            accel,
+            test,
+            p,
+            q,
+            fp,
+            fq,
+        } = self;
+        accel.visible_with(test, p, q, fp, fq)
     }
 }
 
