@@ -205,6 +205,37 @@ fn check_answers(name: &str, scene: &Scene, accels: &[Accel], w: &Workload) {
     );
 }
 
+/// Closest-hit rays per second of `a` over the workload's bounces (one timed pass).
+fn closest_rate(a: &Accel, w: &Workload) -> f64 {
+    let t = Instant::now();
+    let mut faces = 0usize;
+    for &(f, x, d) in &w.bounces {
+        if let Some(h) = a.intersect_from(f, x, d) {
+            faces += h.face;
+        }
+    }
+    black_box(faces);
+    w.bounces.len() as f64 / t.elapsed().as_secs_f64()
+}
+
+/// Visibility rays per second of `a` over the workload's segments (one timed pass).
+fn visibility_rate(a: &Accel, w: &Workload) -> f64 {
+    let t = Instant::now();
+    let seen = w
+        .segments
+        .iter()
+        .filter(|&&(p, fp, q, fq)| a.visible_between(p, fp, q, fq))
+        .count();
+    black_box(seen);
+    w.segments.len() as f64 / t.elapsed().as_secs_f64()
+}
+
+/// The median of `v` (sorted in place).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
 /// Closest-hit rays per second of each preset, timed in alternation over several rounds (median of each),
 /// so that the load of a shared machine, which drifts between criterion's groups, falls on all presets alike.
 fn interleaved_comparison(name: &str, accels: &[Accel], w: &Workload) {
@@ -212,22 +243,10 @@ fn interleaved_comparison(name: &str, accels: &[Accel], w: &Workload) {
     let mut rates = vec![Vec::with_capacity(rounds); accels.len()];
     for _ in 0..rounds {
         for (a, r) in accels.iter().zip(&mut rates) {
-            let t = Instant::now();
-            let mut faces = 0usize;
-            for &(f, x, d) in &w.bounces {
-                if let Some(h) = a.intersect_from(f, x, d) {
-                    faces += h.face;
-                }
-            }
-            black_box(faces);
-            r.push(w.bounces.len() as f64 / t.elapsed().as_secs_f64());
+            r.push(closest_rate(a, w));
         }
     }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let m: Vec<f64> = rates.iter_mut().map(median).collect();
+    let m: Vec<f64> = rates.iter_mut().map(|r| median(r)).collect();
     eprintln!(
         "{name}: interleaved closest hit, median of {rounds} rounds: Fast {:.3} M rays/s, Medium {:.3} \
          ({:.2}× Fast), Quality {:.3} ({:.2}× Fast)",
@@ -275,29 +294,10 @@ fn node_test_comparison(name: &str, scene: &Scene, w: &Workload) {
     let mut rates: [[Vec<f64>; 2]; 2] = Default::default();
     for _ in 0..rounds {
         for (k, a) in accels.iter().enumerate() {
-            let t = Instant::now();
-            let mut faces = 0usize;
-            for &(f, x, d) in &w.bounces {
-                if let Some(h) = a.intersect_from(f, x, d) {
-                    faces += h.face;
-                }
-            }
-            black_box(faces);
-            rates[0][k].push(w.bounces.len() as f64 / t.elapsed().as_secs_f64());
-            let t = Instant::now();
-            let seen = w
-                .segments
-                .iter()
-                .filter(|&&(p, fp, q, fq)| a.visible_between(p, fp, q, fq))
-                .count();
-            black_box(seen);
-            rates[1][k].push(w.segments.len() as f64 / t.elapsed().as_secs_f64());
+            rates[0][k].push(closest_rate(a, w));
+            rates[1][k].push(visibility_rate(a, w));
         }
     }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     for (test, r) in ["closest hit", "visibility"].iter().zip(&mut rates) {
         let (portable, avx2) = (median(&mut r[0]), median(&mut r[1]));
         eprintln!(
@@ -348,10 +348,6 @@ fn thread_scaling(name: &str, a: &Accel, w: &Workload) {
         }
     }
     assert_eq!(counts[0], counts[1], "{name}: ray counts differ");
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     for (test, r) in ["closest hit", "visibility"].iter().zip(&mut rates) {
         let (one, two) = (median(&mut r[0]), median(&mut r[1]));
         eprintln!(

@@ -654,19 +654,27 @@ impl Accel {
         tmax: f64,
         skip: FaceId,
     ) -> (Option<Hit>, TraversalCost) {
+        self.traverse(Closest {
+            origin,
+            dir,
+            tmax,
+            skip,
+        })
+    }
+
+    /// Runs a traversal with the node test in use: with AVX2, inside pulp's `V3::vectorize`, which compiles
+    /// the (inlined) traversal with AVX2 enabled around the eight-lane test.
+    #[inline(always)]
+    fn traverse<Q: Traversal>(&self, query: Q) -> Q::Output {
         #[cfg(target_arch = "x86_64")]
         if let Some(test) = self.avx2 {
-            // The traversal compiled with AVX2 enabled, around its eight-lane node test.
-            return test.0.vectorize(Closest {
+            return test.0.vectorize(Vectorized {
                 accel: self,
                 test,
-                origin,
-                dir,
-                tmax,
-                skip,
+                query,
             });
         }
-        self.closest_with(Portable, origin, dir, tmax, skip)
+        query.run(self, Portable)
     }
 
     #[inline(always)]
@@ -838,19 +846,7 @@ impl Accel {
         fp: FaceId,
         fq: FaceId,
     ) -> (bool, TraversalCost) {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(test) = self.avx2 {
-            // The traversal compiled with AVX2 enabled, around its eight-lane node test.
-            return test.0.vectorize(Visible {
-                accel: self,
-                test,
-                p,
-                q,
-                fp,
-                fq,
-            });
-        }
-        self.visible_with(Portable, p, q, fp, fq)
+        self.traverse(Visible { p, q, fp, fq })
     }
 
     #[inline(always)]
@@ -931,62 +927,62 @@ impl Accel {
     }
 }
 
-/// A closest-hit traversal with the AVX2 node test, for `V3::vectorize` (which compiles what it calls with
-/// AVX2 enabled; `call` is inlined into it).
-#[cfg(target_arch = "x86_64")]
-struct Closest<'a> {
-    accel: &'a Accel,
-    test: crate::wide_node_test::Avx2,
+/// One traversal's query, run with a given node test.
+trait Traversal {
+    type Output;
+    fn run<T: NodeTest>(self, accel: &Accel, test: T) -> Self::Output;
+}
+
+/// A closest-hit query ([`Accel::closest`]).
+struct Closest {
     origin: DVec3,
     dir: DVec3,
     tmax: f64,
     skip: FaceId,
 }
 
-#[cfg(target_arch = "x86_64")]
-impl pulp::NullaryFnOnce for Closest<'_> {
+impl Traversal for Closest {
     type Output = (Option<Hit>, TraversalCost);
 
     #[inline(always)]
-    fn call(self) -> Self::Output {
-        let Self {
-            accel,
-            test,
-            origin,
-            dir,
-            tmax,
-            skip,
-        } = self;
-        accel.closest_with(test, origin, dir, tmax, skip)
+    fn run<T: NodeTest>(self, accel: &Accel, test: T) -> Self::Output {
+        accel.closest_with(test, self.origin, self.dir, self.tmax, self.skip)
     }
 }
 
-/// A visibility traversal with the AVX2 node test, for `V3::vectorize` (as [`Closest`]).
-#[cfg(target_arch = "x86_64")]
-struct Visible<'a> {
-    accel: &'a Accel,
-    test: crate::wide_node_test::Avx2,
+/// A visibility query ([`Accel::visible_ignoring`]).
+struct Visible {
     p: DVec3,
     q: DVec3,
     fp: FaceId,
     fq: FaceId,
 }
 
-#[cfg(target_arch = "x86_64")]
-impl pulp::NullaryFnOnce for Visible<'_> {
+impl Traversal for Visible {
     type Output = (bool, TraversalCost);
 
     #[inline(always)]
+    fn run<T: NodeTest>(self, accel: &Accel, test: T) -> Self::Output {
+        accel.visible_with(test, self.p, self.q, self.fp, self.fq)
+    }
+}
+
+/// A query with the AVX2 node test, for `V3::vectorize` (which compiles what it calls with AVX2 enabled;
+/// `call` and the traversal are inlined into it).
+#[cfg(target_arch = "x86_64")]
+struct Vectorized<'a, Q> {
+    accel: &'a Accel,
+    test: crate::wide_node_test::Avx2,
+    query: Q,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<Q: Traversal> pulp::NullaryFnOnce for Vectorized<'_, Q> {
+    type Output = Q::Output;
+
+    #[inline(always)]
     fn call(self) -> Self::Output {
-        let Self {
-            accel,
-            test,
-            p,
-            q,
-            fp,
-            fq,
-        } = self;
-        accel.visible_with(test, p, q, fp, fq)
+        self.query.run(self.accel, self.test)
     }
 }
 
