@@ -127,7 +127,9 @@ impl Image {
 }
 
 /// Renders the radiance B/π of `solution` seen through `camera`, `spp` jittered samples per pixel
-/// (1 = pixel centres). Rays that escape the scene are black.
+/// (1 = pixel centres). Rays that escape the scene are black. `progress(pixels_done, pixels_total)` is
+/// called from worker threads after each row: with a final gather every sample is a gather, so an image
+/// can take minutes.
 pub fn render_solution(
     scene: &Scene,
     accel: &Accel,
@@ -135,10 +137,13 @@ pub fn render_solution(
     solution: &dyn Solution,
     spp: u32,
     seed: u64,
+    progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Image {
     let (w, h) = (camera.width, camera.height);
     let spp = spp.max(1);
-    let mut pixels = vec![Rgb::ZERO; (w * h) as usize];
+    let total = (w * h) as usize;
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let mut pixels = vec![Rgb::ZERO; total];
     pixels
         .par_chunks_mut(w as usize)
         .enumerate()
@@ -161,6 +166,11 @@ pub fn render_solution(
                 }
                 *px = sum / spp as f64;
             }
+            let row = w as usize;
+            progress(
+                done.fetch_add(row, std::sync::atomic::Ordering::AcqRel) + row,
+                total,
+            );
         });
     Image {
         width: w,

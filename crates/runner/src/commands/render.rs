@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 
 use super::solve::{MethodArgs, load, solve};
 use crate::output::exr_image::write_exr;
-use crate::pathtraced;
+use crate::{pathtraced, progress};
 
 /// Options of `radlab render`.
 #[derive(Clone, Debug, clap::Args)]
@@ -53,6 +53,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         return Ok(());
     }
     let solved = solve(&loaded, a, &[])?;
+    let bar = progress::bar(u64::from(camera.width * camera.height), "image");
     let image = radlab_scene::render_solution(
         &loaded.scene,
         &loaded.accel,
@@ -60,7 +61,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         solved.solution(),
         args.spp,
         a.seed,
+        &|done, _| bar.set_position(done as u64),
     );
+    bar.finish_and_clear();
     write_exr(&args.out, &image)?;
     println!("wrote {}", args.out.display());
     Ok(())

@@ -149,8 +149,17 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     ply_radiosity::write_ply(&out.join("radiosity.ply"), scene, solution, piece)?;
     let mut written = vec!["faces.csv", "radiosity.ply"];
     if let Some(camera) = &scene.camera {
-        let image =
-            radlab_scene::render_solution(scene, &loaded.accel, camera, solution, args.spp, a.seed);
+        let bar = progress::bar(u64::from(camera.width * camera.height), "image");
+        let image = radlab_scene::render_solution(
+            scene,
+            &loaded.accel,
+            camera,
+            solution,
+            args.spp,
+            a.seed,
+            &|done, _| bar.set_position(done as u64),
+        );
+        bar.finish_and_clear();
         exr_image::write_exr(&out.join("image.exr"), &image)?;
         written.push("image.exr");
     }

@@ -478,6 +478,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
                 solver.solution(),
                 job.outputs.image_spp,
                 spec.seed,
+                &|_, _| {},
             )
         };
         result.image_s = t0.elapsed().as_secs_f64();
