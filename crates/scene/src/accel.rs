@@ -506,15 +506,6 @@ impl Accel {
         }
     }
 
-    /// The node test traversals use.
-    pub fn node_test(&self) -> NodeTestKind {
-        if self.avx2.is_some() {
-            NodeTestKind::Avx2
-        } else {
-            NodeTestKind::Portable
-        }
-    }
-
     /// Chooses the node test; returns false, and keeps the current one, if the processor lacks AVX2.
     pub fn set_node_test(&mut self, kind: NodeTestKind) -> bool {
         self.avx2 = match kind {

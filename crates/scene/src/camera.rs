@@ -166,9 +166,9 @@ pub fn render_solution(
                 }
                 *px = sum / spp as f64;
             }
-            let row = w as usize;
+            let n = row.len();
             progress(
-                done.fetch_add(row, std::sync::atomic::Ordering::AcqRel) + row,
+                done.fetch_add(n, std::sync::atomic::Ordering::AcqRel) + n,
                 total,
             );
         });

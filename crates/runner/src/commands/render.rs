@@ -6,9 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 
-use super::solve::{MethodArgs, load, solve};
+use super::solve::{MethodArgs, load, render_image, solve};
 use crate::output::exr_image::write_exr;
-use crate::{pathtraced, progress};
+use crate::pathtraced;
 
 /// Options of `radlab render`.
 #[derive(Clone, Debug, clap::Args)]
@@ -53,17 +53,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         return Ok(());
     }
     let solved = solve(&loaded, a, &[])?;
-    let bar = progress::bar(u64::from(camera.width * camera.height), "image");
-    let image = radlab_scene::render_solution(
-        &loaded.scene,
-        &loaded.accel,
-        &camera,
-        solved.solution(),
-        args.spp,
-        a.seed,
-        &|done, _| bar.set_position(done as u64),
-    );
-    bar.finish_and_clear();
+    let image = render_image(&loaded, &camera, solved.solution(), args.spp, a.seed);
     write_exr(&args.out, &image)?;
     println!("wrote {}", args.out.display());
     Ok(())

@@ -104,6 +104,28 @@ pub fn solve<'a>(
     Ok(Solved(solver, outcome, last))
 }
 
+/// The radiance B/π of `solution` through `camera` (`render_solution`), with a progress bar on a terminal.
+pub fn render_image(
+    loaded: &Loaded,
+    camera: &radlab_scene::Camera,
+    solution: &dyn radlab_scene::Solution,
+    spp: u32,
+    seed: u64,
+) -> radlab_scene::Image {
+    let bar = progress::bar(u64::from(camera.width * camera.height), "image");
+    let image = radlab_scene::render_solution(
+        &loaded.scene,
+        &loaded.accel,
+        camera,
+        solution,
+        spp,
+        seed,
+        &|done, _| bar.set_position(done as u64),
+    );
+    bar.finish_and_clear();
+    image
+}
+
 /// Options of `radlab solve`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct SolveArgs {
@@ -149,17 +171,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     ply_radiosity::write_ply(&out.join("radiosity.ply"), scene, solution, piece)?;
     let mut written = vec!["faces.csv", "radiosity.ply"];
     if let Some(camera) = &scene.camera {
-        let bar = progress::bar(u64::from(camera.width * camera.height), "image");
-        let image = radlab_scene::render_solution(
-            scene,
-            &loaded.accel,
-            camera,
-            solution,
-            args.spp,
-            a.seed,
-            &|done, _| bar.set_position(done as u64),
-        );
-        bar.finish_and_clear();
+        let image = render_image(&loaded, camera, solution, args.spp, a.seed);
         exr_image::write_exr(&out.join("image.exr"), &image)?;
         written.push("image.exr");
     }
