@@ -11,6 +11,10 @@
 //! - The two BVH node tests (`NodeTestKind`: obvhs's SSE test and the eight-lane AVX2 one) of the default
 //!   preset in alternation, after checking that they give the same answers and visit the same nodes
 //!   (printed).
+//! - Bundles of 16 segments between uniform points of two faces (a form factor's visibility rays between two
+//!   patches; faces chosen by area, and uniformly), one segment at a time (`visible_between`) and as packets
+//!   (`visible_many`), in alternation, after checking that both give the same answers and ray counts
+//!   (printed).
 //! - The 2-thread speed-up of closest hit and visibility (default preset, rays split into chunks over a rayon
 //!   pool of 1 and then 2 threads, in alternation; printed), and the ray count, which must be the same.
 //! - BVH build time of the bumpy sphere with 10⁶ triangles on pools of 1 and 2 threads (`Fast` and `VeryFast`).
@@ -35,7 +39,7 @@ use std::time::Instant;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
 use radlab_scene::sampling::{self, Rng};
-use radlab_scene::{Accel, AccelPreset, FaceId, NodeTestKind, Ray, Scene, builtin};
+use radlab_scene::{Accel, AccelPreset, FaceId, NodeTestKind, Ray, Scene, Segment, builtin};
 use rayon::prelude::*;
 
 const PRESETS: [AccelPreset; 4] = [
@@ -45,6 +49,8 @@ const PRESETS: [AccelPreset; 4] = [
     AccelPreset::VeryFast,
 ];
 const RAYS: usize = 20_000;
+/// Segments per bundle between two faces (a form factor's visibility rays between two patches).
+const BUNDLE: usize = 16;
 
 /// A face chosen with probability proportional to area, and a uniform point on it.
 struct SurfaceSampler {
@@ -79,10 +85,14 @@ impl SurfaceSampler {
     }
 }
 
-/// Bounce rays (face, origin, cosine-distributed direction) and visibility segments between surface points.
+/// Bounce rays (face, origin, cosine-distributed direction), visibility segments between surface points, and
+/// the same number of segments in bundles of [`BUNDLE`] between uniform points of two faces, the faces chosen
+/// by area (`bundles[0]`: on the bumpy sphere mostly its room's six walls, so the bundles spread) and
+/// uniformly (`bundles[1]`: mostly its small triangles, so the bundles are narrow).
 struct Workload {
     bounces: Vec<(FaceId, DVec3, DVec3)>,
     segments: Vec<(DVec3, FaceId, DVec3, FaceId)>,
+    bundles: [Vec<Vec<Segment>>; 2],
 }
 
 fn workload(scene: &Scene) -> Workload {
@@ -107,7 +117,40 @@ fn workload(scene: &Scene) -> Workload {
             (a, fa, b, fb)
         })
         .collect();
-    Workload { bounces, segments }
+    let mut bundle = |by_area: bool| -> Vec<Vec<Segment>> {
+        let face = |r: &mut Rng| {
+            if by_area {
+                s.sample(scene, r).0
+            } else {
+                ((sampling::uniform(r) * scene.faces.len() as f64) as usize)
+                    .min(scene.faces.len() - 1)
+            }
+        };
+        (0..RAYS / BUNDLE)
+            .map(|_| {
+                let fp = face(&mut r);
+                let fq = face(&mut r);
+                let (a, b) = (scene.polygon(fp), scene.polygon(fq));
+                let mut point = |poly: &radlab_scene::Polygon| {
+                    poly.sample_uniform(sampling::uniform(&mut r), sampling::uniform(&mut r))
+                };
+                (0..BUNDLE)
+                    .map(|_| Segment {
+                        p: point(&a),
+                        fp,
+                        q: point(&b),
+                        fq,
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let bundles = [bundle(true), bundle(false)];
+    Workload {
+        bounces,
+        segments,
+        bundles,
+    }
 }
 
 /// Brute-force closest hit over every face in f64 (the reference for the small scenes).
@@ -228,6 +271,67 @@ fn visibility_rate(a: &Accel, w: &Workload) -> f64 {
         .count();
     black_box(seen);
     w.segments.len() as f64 / t.elapsed().as_secs_f64()
+}
+
+/// Visibility rays per second over the workload's bundles, one segment at a time (`visible_between`) or a
+/// bundle at a time (`visible_many`); one timed pass.
+fn bundle_rate(a: &Accel, bundles: &[Vec<Segment>], packets: bool) -> f64 {
+    let t = Instant::now();
+    let mut seen = 0usize;
+    let mut out = [false; BUNDLE];
+    for b in bundles {
+        if packets {
+            a.visible_many(b, &mut out);
+            seen += out.iter().filter(|&&v| v).count();
+        } else {
+            seen += b
+                .iter()
+                .filter(|s| a.visible_between(s.p, s.fp, s.q, s.fq))
+                .count();
+        }
+    }
+    black_box(seen);
+    (bundles.len() * BUNDLE) as f64 / t.elapsed().as_secs_f64()
+}
+
+/// Bundles of segments between two faces one segment at a time and as packets: first the same answers and
+/// ray counts, then rays per second of each in alternation (median of 9 rounds) and their ratio; for faces
+/// chosen by area and uniformly.
+fn packet_comparison(name: &str, a: &Accel, w: &Workload) {
+    for (bundles, chosen) in w.bundles.iter().zip(["by area", "uniformly"]) {
+        let mut out = [false; BUNDLE];
+        let (mut blocked, before) = (0usize, a.rays_cast());
+        for b in bundles {
+            a.visible_many(b, &mut out);
+            let one: Vec<bool> = b
+                .iter()
+                .map(|s| a.visible_between(s.p, s.fp, s.q, s.fq))
+                .collect();
+            assert_eq!(out.as_slice(), one, "{name}: a packet answers differently");
+            blocked += one.iter().filter(|&&v| !v).count();
+        }
+        assert_eq!(
+            a.rays_cast() - before,
+            2 * (bundles.len() * BUNDLE) as u64,
+            "{name}: packets count other rays"
+        );
+        let rounds = 9;
+        let (mut single, mut packed) = (Vec::new(), Vec::new());
+        for _ in 0..rounds {
+            single.push(bundle_rate(a, bundles, false));
+            packed.push(bundle_rate(a, bundles, true));
+        }
+        let (s, p) = (median(&mut single), median(&mut packed));
+        eprintln!(
+            "{name}: bundles of {BUNDLE} segments between two faces chosen {chosen} ({blocked} of {} blocked), \
+             in alternation, median of {rounds} rounds: one by one {:.3} M rays/s, packets {:.3} M rays/s \
+             ({:.2}×), same answers",
+            bundles.len() * BUNDLE,
+            s / 1e6,
+            p / 1e6,
+            p / s
+        );
+    }
 }
 
 /// The median of `v` (sorted in place).
@@ -400,6 +504,7 @@ fn bench_scene(c: &mut Criterion, name: &str, spec: &str) {
     check_answers(name, &scene, &accels, &w);
     interleaved_comparison(name, &accels, &w);
     node_test_comparison(name, &scene, &w);
+    packet_comparison(name, &accels[0], &w);
     thread_scaling(name, &accels[0], &w);
 
     let mut g = c.benchmark_group(format!("closest_hit/{name}"));

@@ -38,6 +38,13 @@
 //! their stats: each thread adds to a counter slot of its own (on its own cache line, so that threads never
 //! contend for one line), and [`Accel::rays_cast`] sums the slots. `Accel` is `Sync`: cast from any number of
 //! rayon threads.
+//!
+//! Segments that share most of their way down the BVH (a form factor's rays between two patches, a point's
+//! rays to a polygon) can be traversed together as a packet ([`Accel::visible_many`]; ray packets after Wald,
+//! Slusallek, Benthin & Wagner 2001): each node is fetched once for the segments that reach it, each of them is
+//! tested against its children with the same node test as alone, and a node reached by one segment only is
+//! left to that segment's own traversal. Each segment meets the same triangles as alone, so its answer is the
+//! same, and it counts as one ray.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
@@ -49,6 +56,7 @@ use obvhs::{
 };
 
 use rayon::prelude::*;
+use smallvec::SmallVec;
 
 use crate::wide_node_test::{NodeTest, Portable};
 use crate::{FaceId, Scene};
@@ -85,6 +93,23 @@ pub struct Hit {
     /// The hit point, `origin + t dir`, on the plane of the triangle hit (to f64 rounding).
     pub point: DVec3,
 }
+
+/// A segment for [`Accel::visible_many`]: from `p` on face `fp` to `q` on face `fq`, the two end faces
+/// ignored as in [`Accel::visible_between`] (`usize::MAX` for a point on no face).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// First end.
+    pub p: DVec3,
+    /// The face `p` lies on.
+    pub fp: FaceId,
+    /// Second end.
+    pub q: DVec3,
+    /// The face `q` lies on.
+    pub fq: FaceId,
+}
+
+/// Most segments one packet traversal of [`Accel::visible_many`] carries (one bit each in a `u32`).
+pub const PACKET_SEGMENTS: usize = 32;
 
 /// What one ray's traversal visited: BVH nodes whose children's boxes were tested against the ray, and
 /// triangles tested (leaf primitives; with spatial splits a triangle may be tested more than once).
@@ -249,7 +274,14 @@ impl RayCounter {
 
     #[inline(always)]
     fn add_one(&self) {
-        self.slots[counter_slot()].0.fetch_add(1, Ordering::Relaxed);
+        self.add(1);
+    }
+
+    #[inline(always)]
+    fn add(&self, rays: u64) {
+        self.slots[counter_slot()]
+            .0
+            .fetch_add(rays, Ordering::Relaxed);
     }
 
     fn total(&self) -> u64 {
@@ -825,6 +857,28 @@ impl Accel {
         self.visible_ignoring(p, q, fp, fq).0
     }
 
+    /// For each segment, whether it is unobstructed: `visible[k]` is exactly
+    /// `visible_between(s.p, s.fp, s.q, s.fq)` for `s = segments[k]`, and every segment counts as one ray, as
+    /// there. The segments are traversed together, up to [`PACKET_SEGMENTS`] at a time (a packet, Wald et al.
+    /// 2001): a node is fetched once for the packet and its children's boxes tested against each segment still
+    /// open that reached it, so segments between two patches, which share most of their path down the BVH,
+    /// share its node loads. A segment's triangle tests are those of its own traversal, so its answer is too.
+    ///
+    /// # Panics
+    /// If the slices differ in length.
+    pub fn visible_many(&self, segments: &[Segment], visible: &mut [bool]) {
+        assert_eq!(segments.len(), visible.len(), "one answer per segment");
+        for (segs, out) in segments
+            .chunks(PACKET_SEGMENTS)
+            .zip(visible.chunks_mut(PACKET_SEGMENTS))
+        {
+            let mask = self.traverse(VisiblePacket { segments: segs });
+            for (k, v) in out.iter_mut().enumerate() {
+                *v = mask & (1 << k) != 0;
+            }
+        }
+    }
+
     /// [`Accel::visible`], also returning what the traversal visited.
     pub fn visible_counting(&self, p: DVec3, q: DVec3) -> (bool, TraversalCost) {
         self.visible_ignoring(p, q, usize::MAX, usize::MAX)
@@ -850,21 +904,32 @@ impl Accel {
         fq: FaceId,
     ) -> (bool, TraversalCost) {
         let mut cost = TraversalCost::default();
-        let d = q - p;
-        let len = d.length();
-        if !(len > 0.0 && len.is_finite()) {
-            debug_assert!(len == 0.0, "segment with non-finite ends {p:?} {q:?}");
+        let Some(segment) = self.segment(p, q, fp, fq) else {
             return (true, cost);
-        }
+        };
         self.rays.add_one();
-        let dir = d / len;
-        let (p, q) = (p - self.offset, q - self.offset);
-        let (ray, fray) = self.filter_ray(p, dir, len);
-        let tau32 = (PLANE_TOL_REL * NORMALISED_DIAGONAL) as f32;
-        let tol = self.tol;
+        let visible = self.unoccluded_below(test, &segment, 0, &mut cost);
+        (visible, cost)
+    }
+
+    /// Whether no triangle under node `root` occludes the segment: obvhs's any-hit traversal (as in
+    /// `CwBvh::ray_traverse_miss`) of that subtree, adding the nodes and triangles it visits to `cost`.
+    #[inline(always)]
+    fn unoccluded_below<T: NodeTest>(
+        &self,
+        test: T,
+        segment: &SegmentRay,
+        root: u32,
+        cost: &mut TraversalCost,
+    ) -> bool {
+        let ray = segment.ray;
         let mut visible = true;
-        // obvhs's any-hit traversal (as in `CwBvh::ray_traverse_miss`), counting nodes and triangles.
         let mut state = self.bvh.new_traversal(ray.direction);
+        if !self.bvh.nodes.is_empty() {
+            // The group obvhs starts from (the root as the only child of a node with no inner children), at
+            // `root` instead.
+            state.current_group = UVec2::new(root, 0x8000_0000);
+        }
         let mut node;
         'traversal: {
             obvhs::traverse!(
@@ -878,44 +943,224 @@ impl Accel {
                 {
                     cost.triangles += 1;
                     let slot = state.primitive_id as usize;
-                    let tri = &self.slot_tri[slot];
-                    let f = tri.face();
-                    let filter = if f == fp || f == fq {
-                        Filter::Miss
-                    } else {
-                        f32_filter(tri, &fray, ray.tmax, self.edge_err, tau32)
-                    };
-                    if filter == Filter::Outside {
-                        debug_assert!({
-                            let [a, n] = self.slot_plane[slot];
-                            let (b, c) = self.far_vertices(slot);
-                            let (sp, sq) = (n.dot(p - a), n.dot(q - a));
-                            !((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
-                                || !self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
-                        });
-                    } else if filter != Filter::Miss {
-                        let [a, n] = self.slot_plane[slot];
-                        let (sp, sq) = (n.dot(p - a), n.dot(q - a));
-                        // Only a plane crossed between the ends, both ends clear of it, can occlude.
-                        if ((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
-                            && ({
-                                let check = || {
-                                    let (b, c) = self.far_vertices(slot);
-                                    self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
-                                };
-                                debug_assert!(filter != Filter::Inside || check());
-                                filter == Filter::Inside || check()
-                            })
-                        {
-                            visible = false;
-                            break 'traversal;
-                        }
+                    if self.occludes(slot, segment) {
+                        visible = false;
+                        break 'traversal;
                     }
                 }
             );
         }
-        (visible, cost)
+        visible
     }
+
+    /// The f32 and f64 forms of a segment from `p` to `q` (scene coordinates) with its end faces, or `None`
+    /// for a segment of zero or non-finite length (unobstructed, and not a ray cast).
+    #[inline(always)]
+    fn segment(&self, p: DVec3, q: DVec3, fp: FaceId, fq: FaceId) -> Option<SegmentRay> {
+        let d = q - p;
+        let len = d.length();
+        if !(len > 0.0 && len.is_finite()) {
+            debug_assert!(len == 0.0, "segment with non-finite ends {p:?} {q:?}");
+            return None;
+        }
+        let dir = d / len;
+        let (p, q) = (p - self.offset, q - self.offset);
+        let (ray, fray) = self.filter_ray(p, dir, len);
+        Some(SegmentRay {
+            ray,
+            fray,
+            p,
+            q,
+            fp,
+            fq,
+        })
+    }
+
+    /// Whether the triangle in `slot` occludes the segment: its plane is crossed between the segment's ends,
+    /// both farther than τ from it, at a point inside it within τ (decided in f32 where the error bounds
+    /// allow, in f64 otherwise); the segment's end faces never do.
+    #[inline(always)]
+    fn occludes(&self, slot: usize, s: &SegmentRay) -> bool {
+        let tau32 = (PLANE_TOL_REL * NORMALISED_DIAGONAL) as f32;
+        let tol = self.tol;
+        let (p, q) = (s.p, s.q);
+        let tri = &self.slot_tri[slot];
+        let f = tri.face();
+        let filter = if f == s.fp || f == s.fq {
+            Filter::Miss
+        } else {
+            f32_filter(tri, &s.fray, s.ray.tmax, self.edge_err, tau32)
+        };
+        if filter == Filter::Outside {
+            debug_assert!({
+                let [a, n] = self.slot_plane[slot];
+                let (b, c) = self.far_vertices(slot);
+                let (sp, sq) = (n.dot(p - a), n.dot(q - a));
+                !((sp > tol && sq < -tol) || (sp < -tol && sq > tol))
+                    || !self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+            });
+            return false;
+        }
+        if filter == Filter::Miss {
+            return false;
+        }
+        let [a, n] = self.slot_plane[slot];
+        let (sp, sq) = (n.dot(p - a), n.dot(q - a));
+        // Only a plane crossed between the ends, both ends clear of it, can occlude.
+        ((sp > tol && sq < -tol) || (sp < -tol && sq > tol)) && {
+            let check = || {
+                let (b, c) = self.far_vertices(slot);
+                self.inside(a, b, c, n, p + (sp / (sp - sq)) * (q - p))
+            };
+            debug_assert!(filter != Filter::Inside || check());
+            filter == Filter::Inside || check()
+        }
+    }
+
+    /// The packet traversal of [`Accel::visible_many`] for at most [`PACKET_SEGMENTS`] segments: a stack of
+    /// (node, segments that reached it); at a node, each of those segments' child hits (the same slab tests as
+    /// its own traversal) are gathered per child slot, inner children are pushed with the segments that hit
+    /// them, and leaf children's triangles are tested against theirs. A segment leaves the packet at its
+    /// first occluder. Returns the mask of unobstructed segments.
+    #[inline(always)]
+    fn visible_packet_with<T: NodeTest>(&self, test: T, segments: &[Segment]) -> u32 {
+        debug_assert!(segments.len() <= PACKET_SEGMENTS);
+        // The segments' rays, in packet order (a segment of zero length keeps its place, closed).
+        let mut rays: SmallVec<[(SegmentRay, u32); PACKET_SEGMENTS]> = SmallVec::new();
+        let mut open = 0u32;
+        let mut visible = 0u32;
+        for (k, s) in segments.iter().enumerate() {
+            match self.segment(s.p, s.q, s.fp, s.fq) {
+                Some(r) => {
+                    let oct = octant_inv4(r.ray.direction);
+                    rays.push((r, oct));
+                    open |= 1 << k;
+                }
+                None => {
+                    rays.push((SegmentRay::NONE, 0));
+                    visible |= 1 << k;
+                }
+            }
+        }
+        if open == 0 {
+            return visible;
+        }
+        self.rays.add(u64::from(open.count_ones()));
+        if self.bvh.nodes.is_empty() {
+            return visible | open;
+        }
+        // obvhs visits a node's inner children in decreasing order of slot ^ (its octant code & 7): here in
+        // the order of the first open segment's octant.
+        let octant = (rays[open.trailing_zeros() as usize].1 & 7) as usize;
+        let mut stack: SmallVec<[(u32, u32); 64]> = SmallVec::new();
+        stack.push((0, open));
+        while let Some((index, reached)) = stack.pop() {
+            let reached = reached & open;
+            if reached == 0 {
+                continue;
+            }
+            if reached.count_ones() == 1 {
+                // One segment left here: its own traversal of the subtree, without the packet's bookkeeping.
+                let k = reached.trailing_zeros() as usize;
+                let mut cost = TraversalCost::default();
+                if !self.unoccluded_below(test, &rays[k].0, index, &mut cost) {
+                    open &= !reached;
+                }
+                continue;
+            }
+            let node = &self.bvh.nodes[index as usize];
+            let mut by_slot = [0u32; 8];
+            for k in bits(reached) {
+                let (r, oct) = &rays[k];
+                for i in bits(test.slot_hits(node, &r.ray, *oct)) {
+                    by_slot[i] |= 1 << k;
+                }
+            }
+            // Leaf children's triangles first, then the inner children, nearest first for the packet's
+            // direction.
+            for (i, &who) in by_slot.iter().enumerate() {
+                if who == 0 || node.imask & (1 << i) != 0 {
+                    continue;
+                }
+                let meta = node.child_meta[i];
+                let first = node.primitive_base_idx as usize + usize::from(meta & 0b1_1111);
+                for slot in first..first + (meta >> 5).count_ones() as usize {
+                    for k in bits(who & open) {
+                        if self.occludes(slot, &rays[k].0) {
+                            open &= !(1 << k);
+                        }
+                    }
+                }
+            }
+            if open == 0 {
+                break;
+            }
+            for key in 0..8 {
+                let i = key ^ octant;
+                if by_slot[i] != 0 && node.imask & (1 << i) != 0 {
+                    let below = u32::from(node.imask) & ((1u32 << i) - 1);
+                    stack.push((node.child_base_idx + below.count_ones(), by_slot[i]));
+                }
+            }
+        }
+        visible | open
+    }
+}
+
+/// obvhs's code of a direction's octant (its private `ray_get_octant_inv4`): 4, 2, 1 for non-negative x, y,
+/// z, repeated in each byte.
+#[inline(always)]
+fn octant_inv4(d: Vec3A) -> u32 {
+    (if d.x < 0.0 { 0 } else { 0x0404_0404 })
+        | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
+        | (if d.z < 0.0 { 0 } else { 0x0101_0101 })
+}
+
+/// A segment ready for traversal: the f32 ray of the BVH and of the triangle filter, and the f64 ends
+/// (relative to the scene's centre) with their faces.
+#[derive(Clone, Copy, Debug)]
+struct SegmentRay {
+    ray: BvhRay,
+    fray: FilterRay,
+    p: DVec3,
+    q: DVec3,
+    fp: FaceId,
+    fq: FaceId,
+}
+
+impl SegmentRay {
+    /// A placeholder for a segment that is not traversed.
+    const NONE: Self = Self {
+        ray: BvhRay {
+            origin: Vec3A::ZERO,
+            direction: Vec3A::ZERO,
+            inv_direction: Vec3A::ZERO,
+            tmin: 0.0,
+            tmax: 0.0,
+        },
+        fray: FilterRay {
+            o: Vec3A::ZERO,
+            d: Vec3A::ZERO,
+            d_l1: 0.0,
+            tv_err: 0.0,
+        },
+        p: DVec3::ZERO,
+        q: DVec3::ZERO,
+        fp: usize::MAX,
+        fq: usize::MAX,
+    };
+}
+
+/// The indices of the set bits of `mask`, lowest first.
+#[inline(always)]
+fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
 }
 
 /// One traversal's query, run with a given node test.
@@ -955,6 +1200,20 @@ impl Traversal for Visible {
     #[inline(always)]
     fn run<T: NodeTest>(self, accel: &Accel, test: T) -> Self::Output {
         accel.visible_with(test, self.p, self.q, self.fp, self.fq)
+    }
+}
+
+/// A packet of visibility queries ([`Accel::visible_many`]).
+struct VisiblePacket<'s> {
+    segments: &'s [Segment],
+}
+
+impl Traversal for VisiblePacket<'_> {
+    type Output = u32;
+
+    #[inline(always)]
+    fn run<T: NodeTest>(self, accel: &Accel, test: T) -> Self::Output {
+        accel.visible_packet_with(test, self.segments)
     }
 }
 

@@ -58,7 +58,7 @@ use glam::DVec3;
 use crate::form_factor::{VisibilitySampling, point_polygon};
 use crate::gouraud::ElementValue;
 use crate::sampling::{self, mix64};
-use crate::{Accel, FaceId, Polygon, Rgb, Scene};
+use crate::{Accel, FaceId, Polygon, Rgb, Scene, Segment};
 
 /// Default visibility toward emitting source elements.
 pub const DEFAULT_DIRECT_VISIBILITY: VisibilitySampling = VisibilitySampling::Jittered4x4;
@@ -133,18 +133,24 @@ impl GatherSettings {
                 }
             }
             _ => {
-                let total = how.rays();
-                let side = (total as f64).sqrt().round() as u32;
+                let total = how.rays() as usize;
+                let side = (total as f64).sqrt().round() as usize;
                 let mut r = sampling::rng(self.seed, key ^ mix64(stream));
-                let mut seen = 0u32;
-                for k in 0..total {
+                // The rays share their origin: one packet.
+                let mut segments = [Segment {
+                    p: point,
+                    fp: face,
+                    q: DVec3::ZERO,
+                    fq: src.face,
+                }; 64];
+                for (k, s) in segments.iter_mut().enumerate().take(total) {
                     let u = (((k % side) as f64) + sampling::uniform(&mut r)) / side as f64;
                     let w = (((k / side) as f64) + sampling::uniform(&mut r)) / side as f64;
-                    let y = src.polygon.point_at(u, w);
-                    if accel.visible_between(point, face, y, src.face) {
-                        seen += 1;
-                    }
+                    s.q = src.polygon.point_at(u, w);
                 }
+                let mut visible = [false; 64];
+                accel.visible_many(&segments[..total], &mut visible[..total]);
+                let seen = visible[..total].iter().filter(|&&v| v).count();
                 *rays += total as u64;
                 seen as f64 / total as f64
             }

@@ -33,7 +33,7 @@ pub mod test_scenes;
 pub mod vertex_adjacency;
 mod wide_node_test;
 
-pub use accel::{Accel, AccelPreset, Hit, NodeTestKind, Ray};
+pub use accel::{Accel, AccelPreset, Hit, NodeTestKind, PACKET_SEGMENTS, Ray, Segment};
 pub use camera::{Camera, CameraFrame, Image, render_solution};
 pub use edge_adjacency::{EdgeAdjacency, MeshEdge};
 pub use elements::{Element, ElementMesh, default_element_size};

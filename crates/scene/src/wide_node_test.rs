@@ -29,6 +29,20 @@ const NODE_EPSILON: f32 = 0.0001;
 pub(crate) trait NodeTest: Copy {
     /// The hit mask of `node`'s children for `ray` (as `CwBvhNode::intersect_ray`).
     fn hits(self, node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32;
+
+    /// The children `ray` hits as slots: bit i set when child slot i is occupied and its box is hit (the
+    /// same children as [`NodeTest::hits`], in storage order rather than the traversal's bit layout).
+    fn slot_hits(self, node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32;
+}
+
+/// The occupied child slots of `node` (an empty slot's meta byte is 0).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn occupied(node: &CwBvhNode) -> u32 {
+    node.child_meta
+        .iter()
+        .enumerate()
+        .fold(0, |m, (i, &meta)| m | (u32::from(meta != 0) << i))
 }
 
 /// obvhs's own test (SSE on x86-64, scalar elsewhere).
@@ -39,6 +53,18 @@ impl NodeTest for Portable {
     #[inline(always)]
     fn hits(self, node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
         node.intersect_ray(ray, oct_inv4)
+    }
+
+    #[inline(always)]
+    fn slot_hits(self, node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+        // Each occupied slot owns distinct bits of the mask: its unary primitive count at its primitive
+        // offset (a leaf), or one bit at its octant-ordered index (an inner node).
+        let mask = node.intersect_ray(ray, oct_inv4);
+        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+        (0..8).fold(0, |m, i| {
+            let bits = ((child_bits8 >> (8 * i)) & 0xff) << ((bit_index8 >> (8 * i)) & 0xff);
+            m | (u32::from(mask as u64 & bits != 0) << i)
+        })
     }
 }
 
@@ -52,6 +78,41 @@ pub(crate) struct Avx2(pub(crate) pulp::x86::V3);
 impl NodeTest for Avx2 {
     #[inline(always)]
     fn hits(self, node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+        let pulp::x86::V3 {
+            sse2, avx, avx2, ..
+        } = self.0;
+        let hit = self.hit_lanes(node, ray);
+        // Each hit child's bits shifted to its index, OR-ed over the lanes.
+        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+        let bytes = |x: u64| avx2._mm256_cvtepu8_epi32(sse2._mm_set_epi64x(0, x as i64));
+        let lanes = avx2._mm256_and_si256(
+            avx2._mm256_sllv_epi32(bytes(child_bits8), bytes(bit_index8)),
+            hit,
+        );
+        let x = sse2._mm_or_si128(
+            avx._mm256_castsi256_si128(lanes),
+            avx2._mm256_extracti128_si256::<1>(lanes),
+        );
+        let x = sse2._mm_or_si128(x, sse2._mm_shuffle_epi32::<0b01_00_11_10>(x));
+        let x = sse2._mm_or_si128(x, sse2._mm_shuffle_epi32::<0b10_11_00_01>(x));
+        sse2._mm_cvtsi128_si32(x) as u32
+    }
+
+    #[inline(always)]
+    fn slot_hits(self, node: &CwBvhNode, ray: &Ray, _oct_inv4: u32) -> u32 {
+        let hit = self.hit_lanes(node, ray);
+        self.0
+            .avx
+            ._mm256_movemask_ps(self.0.avx._mm256_castsi256_ps(hit)) as u32
+            & occupied(node)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// The slab test of the eight children: all ones in lane i where child slot i's box is hit.
+    #[inline(always)]
+    fn hit_lanes(self, node: &CwBvhNode, ray: &Ray) -> __m256i {
         let pulp::x86::V3 {
             sse2, avx, avx2, ..
         } = self.0;
@@ -78,20 +139,7 @@ impl NodeTest for Avx2 {
         let tmax = avx._mm256_min_ps(fx, avx._mm256_min_ps(fy, fz));
         let tmin = avx._mm256_max_ps(tmin, avx._mm256_set1_ps(NODE_EPSILON));
         let tmax = avx._mm256_min_ps(tmax, avx._mm256_set1_ps(ray.tmax));
-        let hit: __m256i = avx._mm256_castps_si256(avx._mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
-        // Each hit child's bits shifted to its index, OR-ed over the lanes.
-        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-        let lanes = avx2._mm256_and_si256(
-            avx2._mm256_sllv_epi32(bytes(child_bits8), bytes(bit_index8)),
-            hit,
-        );
-        let x = sse2._mm_or_si128(
-            avx._mm256_castsi256_si128(lanes),
-            avx2._mm256_extracti128_si256::<1>(lanes),
-        );
-        let x = sse2._mm_or_si128(x, sse2._mm_shuffle_epi32::<0b01_00_11_10>(x));
-        let x = sse2._mm_or_si128(x, sse2._mm_shuffle_epi32::<0b10_11_00_01>(x));
-        sse2._mm_cvtsi128_si32(x) as u32
+        avx._mm256_castps_si256(avx._mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax))
     }
 }
 

@@ -26,7 +26,7 @@
 use glam::DVec3;
 use radlab_hierarchical::{Link, NodeKind, link_stream};
 use radlab_scene::{
-    Accel, FaceId,
+    Accel, FaceId, PACKET_SEGMENTS, Segment,
     form_factor::{VisibilitySampling, pair_kernel},
     sampling,
 };
@@ -152,16 +152,36 @@ fn facing_fraction_visible(
     mut pair: impl FnMut(&mut sampling::Rng) -> (PointOnFace, PointOnFace),
     rng: &mut sampling::Rng,
 ) -> f64 {
+    // The facing pairs and their kernels, a packet at a time, then their visibility as one packet; summed in
+    // the order drawn.
     let (mut seen, mut facing) = (0.0, 0.0);
-    for _ in 0..n {
-        let ((p, fp, np), (q, fq, nq)) = pair(rng);
-        let w = pair_kernel(p, np, q, nq);
-        if w <= 0.0 {
-            continue;
+    let mut weights = [0.0; PACKET_SEGMENTS];
+    let mut segments = [Segment {
+        p: DVec3::ZERO,
+        fp: 0,
+        q: DVec3::ZERO,
+        fq: 0,
+    }; PACKET_SEGMENTS];
+    let mut visible = [false; PACKET_SEGMENTS];
+    let mut drawn = 0;
+    while drawn < n {
+        let mut len = 0;
+        while drawn < n && len < PACKET_SEGMENTS {
+            drawn += 1;
+            let ((p, fp, np), (q, fq, nq)) = pair(rng);
+            let w = pair_kernel(p, np, q, nq);
+            if w > 0.0 {
+                weights[len] = w;
+                segments[len] = Segment { p, fp, q, fq };
+                len += 1;
+            }
         }
-        facing += w;
-        if accel.visible_between(p, fp, q, fq) {
-            seen += w;
+        accel.visible_many(&segments[..len], &mut visible[..len]);
+        for (&w, &v) in weights.iter().zip(&visible).take(len) {
+            facing += w;
+            if v {
+                seen += w;
+            }
         }
     }
     if facing > 0.0 { seen / facing } else { 0.0 }

@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use radlab_scene::{Accel, EvalPoint, FaceId, Rgb, Scene, form_factor, sampling};
+use radlab_scene::{Accel, EvalPoint, FaceId, Rgb, Scene, Segment, form_factor, sampling};
 use rayon::prelude::*;
 
 use super::config::{ReferenceConfig, ReferenceKind};
@@ -75,16 +75,22 @@ fn direct(scene: &Scene, accel: &Accel, points: &[EvalPoint], seed: u64) -> Vec<
                     continue;
                 }
                 let mut r = sampling::rng(seed, (i * emitters.len() + e) as u64);
-                let n = 8;
-                let mut seen = 0;
-                for j in 0..n * n {
-                    let u = ((j % n) as f64 + sampling::uniform(&mut r)) / n as f64;
-                    let v = ((j / n) as f64 + sampling::uniform(&mut r)) / n as f64;
-                    if accel.visible_between(p.point, p.face, poly.point_at(u, v), e) {
-                        seen += 1;
-                    }
+                const N: usize = 8;
+                let mut segments = [Segment {
+                    p: p.point,
+                    fp: p.face,
+                    q: p.point,
+                    fq: e,
+                }; N * N];
+                for (j, s) in segments.iter_mut().enumerate() {
+                    let u = ((j % N) as f64 + sampling::uniform(&mut r)) / N as f64;
+                    let v = ((j / N) as f64 + sampling::uniform(&mut r)) / N as f64;
+                    s.q = poly.point_at(u, v);
                 }
-                h += scene.emission(e) * f * (seen as f64 / (n * n) as f64);
+                let mut visible = [false; N * N];
+                accel.visible_many(&segments, &mut visible);
+                let seen = visible.iter().filter(|&&v| v).count();
+                h += scene.emission(e) * f * (seen as f64 / (N * N) as f64);
             }
             scene.emission(p.face) + scene.reflectance(p.face) * h
         })

@@ -20,7 +20,7 @@
 use super::gauss_legendre;
 use glam::DVec3;
 
-use crate::{Accel, FaceId, Polygon, sampling};
+use crate::{Accel, FaceId, Polygon, Segment, sampling};
 
 /// How a visibility fraction between two elements is estimated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -81,7 +81,8 @@ impl VisibilitySampling {
 /// occluded one (Wallace, Elmquist & Haines 1989 weight their visibility samples by their form-factor share
 /// alike). An unweighted fraction biases V × F low wherever visibility and kernel are correlated: a pair behind
 /// either plane (zero kernel) would count as blocked, and near-horizon pairs (small kernel) are the ones a
-/// curved surface's own faces block. No facing pair among the samples gives 0.
+/// curved surface's own faces block. No facing pair among the samples gives 0. The facing pairs' rays are cast
+/// as one packet ([`Accel::visible_many`]: the same answers as one at a time).
 #[allow(clippy::too_many_arguments)]
 pub fn visibility_fraction(
     accel: &Accel,
@@ -116,7 +117,15 @@ pub fn visibility_fraction(
                 perm.swap(k, j);
             }
             let (na, nb) = (a.normal(), b.normal());
-            let (mut seen, mut facing) = (0.0, 0.0);
+            // The facing pairs and their kernels, then their visibility as one packet.
+            let mut weights = [0.0; 64];
+            let mut segments = [Segment {
+                p: DVec3::ZERO,
+                fp: fa,
+                q: DVec3::ZERO,
+                fq: fb,
+            }; 64];
+            let mut facing_pairs = 0;
             for (k, &m) in perm.iter().enumerate().take(total) {
                 let m = m as usize;
                 let u =
@@ -127,8 +136,16 @@ pub fn visibility_fraction(
                 if w <= 0.0 {
                     continue;
                 }
+                weights[facing_pairs] = w;
+                (segments[facing_pairs].p, segments[facing_pairs].q) = (x, y);
+                facing_pairs += 1;
+            }
+            let mut visible = [false; 64];
+            accel.visible_many(&segments[..facing_pairs], &mut visible[..facing_pairs]);
+            let (mut seen, mut facing) = (0.0, 0.0);
+            for (&w, &v) in weights.iter().zip(&visible).take(facing_pairs) {
                 facing += w;
-                if accel.visible_between(x, fa, y, fb) {
+                if v {
                     seen += w;
                 }
             }
