@@ -168,7 +168,8 @@ mod tests {
     use glam::Vec3A;
 
     /// The AVX2 test returns obvhs's mask for every node of a BVH over random triangles and random rays,
-    /// including rays along axes (infinite inverse directions), rays starting inside boxes, and short rays.
+    /// including rays along axes (infinite inverse directions), rays starting inside boxes, and short rays; and
+    /// both tests give the same hit children as slots.
     #[test]
     fn avx2_masks_equal_obvhs() {
         let Some(avx2) = avx2_test() else {
@@ -209,6 +210,15 @@ mod tests {
                 let want = node.intersect_ray(&ray, oct);
                 let got = avx2.0.vectorize(|| avx2.hits(node, &ray, oct));
                 assert_eq!(got, want, "ray {r}: node masks differ");
+                // The same children as slots, from either test (packets use these).
+                let slots = Portable.slot_hits(node, &ray, oct);
+                let got = avx2.0.vectorize(|| avx2.slot_hits(node, &ray, oct));
+                assert_eq!(got, slots, "ray {r}: slot masks differ");
+                assert_eq!(
+                    slots == 0,
+                    want == 0,
+                    "ray {r}: slots {slots:b}, mask {want:b}"
+                );
                 compared += 1;
                 nonzero += (want != 0) as usize;
             }
