@@ -158,6 +158,44 @@ impl GatherSettings {
     }
 }
 
+/// A source element's near field: the points within [`NEAR_FIELD`] of its diameter, and a sphere (centroid,
+/// largest vertex distance) that bounds the element.
+#[derive(Debug)]
+struct Reach {
+    distance: f64,
+    centre: DVec3,
+    radius: f64,
+}
+
+impl Reach {
+    fn of(polygon: &Polygon) -> Self {
+        let centre = polygon.centroid();
+        Self {
+            distance: NEAR_FIELD * polygon.diameter(),
+            centre,
+            radius: polygon
+                .vertices()
+                .iter()
+                .map(|v| (*v - centre).length())
+                .fold(0.0, f64::max),
+        }
+    }
+
+    /// Whether `point` is in the near field of `polygon` (this reach's element). A point is at least
+    /// |point − centre| − radius from the element, so where that bound, less a margin far above the rounding
+    /// of either distance, is beyond the reach, the exact distance to the polygon is not computed; the
+    /// answer is the same.
+    fn holds(&self, polygon: &Polygon, point: DVec3) -> bool {
+        !self.surely_beyond(point) && polygon.distance_to(point) < self.distance
+    }
+
+    /// Whether the bounding sphere alone places `point` beyond the reach.
+    fn surely_beyond(&self, point: DVec3) -> bool {
+        let d = (point - self.centre).length();
+        d - self.radius - 1e-9 * (d + self.radius) >= self.distance
+    }
+}
+
 /// The random stream of a query: a hash of the face and of the point's coordinates along two of the face's
 /// edges in units of those edges, quantised to 2^-30, so the stream (and the answer) does not change when the
 /// scene is scaled.
@@ -178,6 +216,8 @@ pub fn query_key(scene: &Scene, face: FaceId, point: DVec3) -> u64 {
 #[derive(Debug)]
 pub struct FinalGather {
     sources: Vec<(ElementValue, bool)>,
+    /// Per source, its near-field reach and a sphere bounding it.
+    reach: Vec<Reach>,
     /// Per source, its near-field sub-polygons with their radiosities, computed at the first near query.
     near: Vec<OnceLock<NearValues>>,
     settings: GatherSettings,
@@ -196,6 +236,7 @@ impl FinalGather {
             .collect::<Vec<_>>();
         Self {
             near: (0..sources.len()).map(|_| OnceLock::new()).collect(),
+            reach: sources.iter().map(|(e, _)| Reach::of(&e.polygon)).collect(),
             sources,
             settings,
             rays: AtomicU64::new(0),
@@ -367,10 +408,7 @@ impl FinalGather {
             if !(f > 0.0) {
                 continue;
             }
-            if !*emits
-                && src.open >= 1.0
-                && src.polygon.distance_to(point) < NEAR_FIELD * src.polygon.diameter()
-            {
+            if !*emits && src.open >= 1.0 && self.reach[j].holds(&src.polygon, point) {
                 let subs = self.near[j].get_or_init(|| self.near_values(scene, accel, j));
                 let mut r = sampling::rng(self.settings.seed, key ^ mix64(j as u64));
                 for (sub, points) in subs.iter() {
@@ -400,6 +438,53 @@ impl FinalGather {
 mod tests {
     use super::*;
     use crate::{ElementMesh, builtin};
+    use glam::dvec3;
+
+    /// The near-field test with its bounding-sphere shortcut answers as the exact distance test, for
+    /// triangles and quads at scales 1e-4 to 1e4 and points from on the element to far from it, many of them
+    /// right at the reach; and the shortcut is taken.
+    #[test]
+    fn the_near_field_shortcut_answers_as_the_distance_test() {
+        let mut r = sampling::rng(31, 0);
+        let mut u = || sampling::uniform(&mut r);
+        let (mut near, mut far, mut shortcut) = (0, 0, 0);
+        for k in 0..20_000 {
+            let scale = [1e-4, 1.0, 1e4][k % 3];
+            let o = scale * dvec3(u() - 0.5, u() - 0.5, u() - 0.5);
+            let (a, b) = (
+                scale * dvec3(u(), u() * 0.1, 0.0),
+                scale * dvec3(u() * 0.2, u(), 0.0),
+            );
+            let poly = if k % 2 == 0 {
+                Polygon::triangle(o, o + a, o + b)
+            } else {
+                Polygon::quad(o, o + a, o + a + b, o + b)
+            };
+            let reach = Reach::of(&poly);
+            // A direction, and a distance from the centroid up to four reaches, or exactly at the reach
+            // from the nearest point of an edge.
+            let d = dvec3(u() - 0.5, u() - 0.5, u() - 0.5).normalize_or(DVec3::Z);
+            let p = if k % 4 == 0 {
+                let v = poly.vertices();
+                let e = v[1].lerp(v[0], u());
+                e + reach.distance * d
+            } else {
+                reach.centre + 4.0 * u() * (reach.distance + reach.radius) * d
+            };
+            let exact = poly.distance_to(p) < NEAR_FIELD * poly.diameter();
+            assert_eq!(reach.holds(&poly, p), exact, "scale {scale}, case {k}");
+            shortcut += usize::from(reach.surely_beyond(p));
+            if exact {
+                near += 1;
+            } else {
+                far += 1;
+            }
+        }
+        assert!(
+            near > 3000 && far > 3000 && shortcut > 3000,
+            "{near} {far} {shortcut}"
+        );
+    }
 
     /// Howell B-3: differential area below the corner of a parallel a × b rectangle at height h.
     fn corner(a: f64, b: f64, h: f64) -> f64 {
@@ -489,7 +574,6 @@ mod tests {
     #[test]
     fn near_field_follows_the_source_into_a_corner() {
         use crate::test_scenes::{grid, material};
-        use glam::dvec3;
         let (rho_f, rho_w, e) = (0.5, 0.5, 1.0);
         let mut b = crate::SceneBuilder::new("corner");
         let floor_m = material(&mut b, "floor", rho_f, 0.0);
