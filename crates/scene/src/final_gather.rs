@@ -262,6 +262,7 @@ impl FinalGather {
     /// Approximate heap bytes held.
     pub fn bytes(&self) -> usize {
         self.sources.capacity() * size_of::<(ElementValue, bool)>()
+            + self.reach.capacity() * size_of::<Reach>()
             + self.near.capacity() * size_of::<OnceLock<NearValues>>()
             + self
                 .near
