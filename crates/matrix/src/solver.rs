@@ -417,7 +417,10 @@ impl Solver for MatrixSolver<'_> {
             links: self.assembly.nonzero,
             form_factors: self.assembly.form_factors,
             rays: self.assembly.rays + self.open_rays,
-            bytes: (self.assembly.matrix.len() * 8 + vectors + self.mesh.bytes()) as u64,
+            bytes: (self.assembly.matrix.len() * 8
+                + vectors
+                + self.mesh.bytes()
+                + self.output.bytes()) as u64,
             residual: self.residual,
         }
     }

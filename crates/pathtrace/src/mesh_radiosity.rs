@@ -469,8 +469,8 @@ impl Solver for McRadiositySolver<'_> {
             bytes: (self.solution.mesh.bytes()
                 + 2 * n * size_of::<Rgb>()
                 + n * size_of::<f64>()
-                + self.source_elements.len() * (size_of::<usize>() + size_of::<f64>()))
-                as u64,
+                + self.source_elements.len() * (size_of::<usize>() + size_of::<f64>())
+                + self.solution.output.bytes()) as u64,
             residual: self.relative_std_error(),
         }
     }

@@ -385,7 +385,8 @@ impl Solver for ProgressiveSolver<'_> {
                 + self.pairs.capacity() * 8
                 + self.has_shot.capacity()
                 + self.shot_patches.capacity() * 4
-                + self.scratch.capacity() * size_of::<f64>()) as u64,
+                + self.scratch.capacity() * size_of::<f64>()
+                + self.output.bytes()) as u64,
             residual: Some(self.unshot_fraction()),
         }
     }
@@ -462,6 +463,11 @@ impl Output {
             reconstructor: Reconstructor::new(kind, seed),
             leaf_position: OnceLock::new(),
         }
+    }
+
+    /// Approximate heap bytes of the built answering data.
+    fn bytes(&self) -> usize {
+        self.reconstructor.bytes() + self.leaf_position.get().map_or(0, |p| p.capacity() * 4)
     }
 
     fn invalidate(&mut self) {

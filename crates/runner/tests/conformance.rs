@@ -24,6 +24,7 @@
 //!   furnace: still B = E/(1 − ρ) within 1 %.
 //! - **emitter facing away** from every surface: exactly its own emission on it and zero elsewhere.
 //! - **bright emitters**: two emitters 1e6 apart in a closed box: energy balance, B ≥ E on both, finite.
+//! - **memory**: a final gather's data is part of the bytes a method reports once it has answered.
 //!
 //! Monte Carlo methods carry noise: a method listed with `seeds > 1` is run with that many seeds, the suite
 //! compares the mean of the runs and adds three standard errors of that mean (from the spread of the runs) to
@@ -1018,4 +1019,40 @@ fn extremes() {
         );
     }
     r.finish();
+}
+
+/// Memory is counted the same way in every method: what a solution builds to answer by final gather (the
+/// sources' values and bounds, the near field's sub-polygons) is part of the bytes its solver reports once it
+/// has answered, as the answering pass's rays and time are part of its cost.
+#[test]
+fn final_gather_data_counts_as_memory() {
+    let scene = room("room with a block", &|b| {
+        let m = material(b, "block", 0.5, 0.0);
+        add_box(b, dvec3(0.3, 0.3, 0.0), dvec3(0.6, 0.5, 0.4), 1, m, true);
+    });
+    let accel = Accel::new(&scene);
+    let points = eval_points(&scene);
+    let mut checked = 0;
+    for m in methods() {
+        if !(m.params)().iter().any(|l| l.name == "reconstruction") {
+            continue;
+        }
+        let mut p = (settings(m.name).params)(0.5);
+        p.insert("reconstruction".into(), "final-gather".into());
+        let mut s = (m.build)(&scene, &accel, p, 1, &[]).expect("build");
+        s.step().expect("step");
+        let before = s.stats().bytes;
+        for &(f, x) in &points {
+            s.solution().radiosity_at(f, x);
+        }
+        let after = s.stats().bytes;
+        assert!(
+            after > before,
+            "{}: {before} bytes before answering by final gather, {after} after",
+            m.name
+        );
+        checked += 1;
+    }
+    // Matrix, progressive, hierarchical, volume-cluster, face-cluster, mc-radiosity.
+    assert!(checked >= 6, "{checked} methods answer by final gather");
 }

@@ -38,7 +38,8 @@ pub struct Stats {
     pub form_factors: u64,
     /// Rays cast by this solver.
     pub rays: u64,
-    /// Bytes of memory the solver holds (its own data, not the scene or the BVH).
+    /// Bytes of memory the solver holds (its own data, not the scene or the BVH), including what its solution
+    /// has built to answer queries (a reconstruction's data).
     pub bytes: u64,
     /// The method's own residual or remaining-energy measure (relative), if it has one.
     pub residual: Option<f64>,

@@ -393,7 +393,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             last_eval = e;
             last_answer = (secs, rays);
             last_values = values;
-            trace.push(row(spec, rec, last_eval, last_answer));
+            trace.push(row(spec, rec, s.stats().bytes, last_eval, last_answer));
             next_eval = wall * growth;
             if target > 0.0 && last_eval.l1 <= target {
                 anyhow::bail!(TargetReached);
@@ -420,7 +420,13 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         last_eval = e;
         last_answer = (secs, rays);
         last_values = values;
-        trace.push(row(spec, &rec, last_eval, last_answer));
+        trace.push(row(
+            spec,
+            &rec,
+            solver.stats().bytes,
+            last_eval,
+            last_answer,
+        ));
     }
     (result.answer_s, result.answer_rays) = last_answer;
     result.outcome = outcome;
@@ -435,6 +441,9 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         result.rays,
         result.bytes,
     ) = (st.elements, st.links, st.form_factors, st.rays, st.bytes);
+    // Memory is read once the solution has answered, so it holds what answering built (Gouraud vertices, a
+    // final gather's sources and near values), as its time and rays do.
+    result.bytes = solver.stats().bytes;
     (result.l1, result.l2, result.max) = (last_eval.l1, last_eval.l2, last_eval.max);
     write_bytes(&trace_path(&job.dir, &result.id), |w| {
         let mut out = csv::Writer::from_writer(w);
@@ -496,7 +505,14 @@ impl std::fmt::Display for TargetReached {
 }
 impl std::error::Error for TargetReached {}
 
-fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors, answer: (f64, u64)) -> TraceRow {
+/// A trace row: the step's record, with `bytes` held after the answering pass.
+fn row(
+    spec: &RunSpec,
+    rec: &solve_loop::StepRecord,
+    bytes: u64,
+    e: Errors,
+    answer: (f64, u64),
+) -> TraceRow {
     let st = rec.stats;
     TraceRow {
         id: spec.id(),
@@ -513,7 +529,7 @@ fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors, answer: (f64, u6
         links: st.links,
         form_factors: st.form_factors,
         rays: st.rays,
-        bytes: st.bytes,
+        bytes,
         residual: st.residual,
         l1: e.l1,
         l2: e.l2,
