@@ -805,6 +805,10 @@ impl<'a> FaceClusterSolver<'a> {
 }
 
 impl Solution for FaceClusterSolver<'_> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        self.gather_work().1
+    }
+
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         if face >= self.scene.face_count() {
             return Rgb::ZERO;

@@ -86,6 +86,10 @@ impl<'a> HierarchicalSolver<'a> {
 }
 
 impl Solution for HierarchicalSolver<'_> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        self.output.gather_work().1
+    }
+
     fn radiosity_at(&self, face: FaceId, point: glam::DVec3) -> Rgb {
         self.output
             .radiosity_at(&self.engine, self.scene, self.accel, face, point)

@@ -427,6 +427,10 @@ impl Solver for MatrixSolver<'_> {
 }
 
 impl Solution for MatrixSolver<'_> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        self.output.gather_work().1
+    }
+
     /// The radiosity at `point` on `face` as the `reconstruction` parameter answers it: the containing
     /// element's value, Gouraud-interpolated vertex values, or a final gather from every element. NaN for a
     /// face id outside the scene.

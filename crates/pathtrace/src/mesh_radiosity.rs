@@ -249,6 +249,10 @@ impl MeshSolution<'_> {
 }
 
 impl Solution for MeshSolution<'_> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        self.output.gather_work().1
+    }
+
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         if face >= self.scene.faces.len() {
             return Rgb::splat(f64::NAN);

@@ -488,6 +488,10 @@ impl ProgressiveSolver<'_> {
 /// Point answers through the `reconstruction` parameter (`constant` answers from [`ProgressiveSolution`]).
 /// The ambient term, when on, is added to every element value first.
 impl Solution for ProgressiveSolver<'_> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        self.output.reconstructor.gather_work().1
+    }
+
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         if face >= self.scene.faces.len() {
             return Rgb::splat(f64::NAN);

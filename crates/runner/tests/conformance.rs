@@ -24,7 +24,8 @@
 //!   furnace: still B = E/(1 − ρ) within 1 %.
 //! - **emitter facing away** from every surface: exactly its own emission on it and zero elsewhere.
 //! - **bright emitters**: two emitters 1e6 apart in a closed box: energy balance, B ≥ E on both, finite.
-//! - **memory**: a final gather's data is part of the bytes a method reports once it has answered.
+//! - **a final gather's cost**: its data is part of the bytes a method reports once it has answered, and its
+//!   kernel evaluations are reported (`Solution::answer_kernel_evaluations`).
 //!
 //! Monte Carlo methods carry noise: a method listed with `seeds > 1` is run with that many seeds, the suite
 //! compares the mean of the runs and adds three standard errors of that mean (from the spread of the runs) to
@@ -1021,11 +1022,12 @@ fn extremes() {
     r.finish();
 }
 
-/// Memory is counted the same way in every method: what a solution builds to answer by final gather (the
+/// A final gather's work is counted the same way in every method: what a solution builds to answer (the
 /// sources' values and bounds, the near field's sub-polygons) is part of the bytes its solver reports once it
-/// has answered, as the answering pass's rays and time are part of its cost.
+/// has answered, and the point-to-polygon factors it evaluates are reported as answering kernel evaluations,
+/// as the answering pass's rays and time are part of its cost.
 #[test]
-fn final_gather_data_counts_as_memory() {
+fn final_gather_work_is_counted() {
     let scene = room("room with a block", &|b| {
         let m = material(b, "block", 0.5, 0.0);
         add_box(b, dvec3(0.3, 0.3, 0.0), dvec3(0.6, 0.5, 0.4), 1, m, true);
@@ -1040,8 +1042,13 @@ fn final_gather_data_counts_as_memory() {
         let mut p = (settings(m.name).params)(0.5);
         p.insert("reconstruction".into(), "final-gather".into());
         let mut s = (m.build)(&scene, &accel, p, 1, &[]).expect("build");
-        s.step().expect("step");
+        for _ in 0..MAX_STEPS {
+            if s.step().expect("step") != Step::Continue {
+                break;
+            }
+        }
         let before = s.stats().bytes;
+        assert_eq!(s.solution().answer_kernel_evaluations(), 0, "{}", m.name);
         for &(f, x) in &points {
             s.solution().radiosity_at(f, x);
         }
@@ -1050,6 +1057,14 @@ fn final_gather_data_counts_as_memory() {
             after > before,
             "{}: {before} bytes before answering by final gather, {after} after",
             m.name
+        );
+        // At least one kernel per point (every point sees several elements of the room).
+        let kernels = s.solution().answer_kernel_evaluations();
+        assert!(
+            kernels >= points.len() as u64,
+            "{}: {kernels} kernel evaluations answering {} points",
+            m.name,
+            points.len()
         );
         checked += 1;
     }

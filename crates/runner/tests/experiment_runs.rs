@@ -117,6 +117,12 @@ fn tiny_experiment_end_to_end_then_skips() {
     for r in results.iter().filter(|r| r.scene == "cornell") {
         assert_eq!(r.reference, "pathtrace");
         assert!(r.floor_l1 > 0.0 && r.l1.is_finite(), "{r:?}");
+        // Matrix radiosity answers by final gather by default: its answering pass's rays and kernel
+        // evaluations are both recorded (a kernel at least per point).
+        assert!(
+            r.answer_rays > 0 && r.answer_form_factors >= r.points,
+            "{r:?}"
+        );
     }
     // Each run's per-point file holds every evaluation point, and its worst point is the run's max error.
     for r in &results {

@@ -10,6 +10,13 @@ use crate::{FaceId, Rgb, SolveError};
 pub trait Solution: Sync {
     /// Radiosity leaving `face` at `point` (W/m², linear RGB), as this method represents it.
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb;
+
+    /// Kernel evaluations (point-to-polygon factors and the like) spent answering queries so far: a final
+    /// gather's work, which [`Stats::form_factors`] (solving only) leaves out. Zero for a method that answers
+    /// without evaluating kernels.
+    fn answer_kernel_evaluations(&self) -> u64 {
+        0
+    }
 }
 
 /// What a step achieved.

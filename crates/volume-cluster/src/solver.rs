@@ -156,6 +156,10 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
 }
 
 impl<M: TransferMode> Solution for ClusterSolver<'_, M> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        self.output.gather_work().1
+    }
+
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         self.output
             .radiosity_at(&self.engine, self.scene, self.accel, face, point)
@@ -230,6 +234,10 @@ impl<'a> VolumeClusterSolver<'a> {
 }
 
 impl Solution for VolumeClusterSolver<'_> {
+    fn answer_kernel_evaluations(&self) -> u64 {
+        each!(self, s => s.answer_kernel_evaluations())
+    }
+
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         each!(self, s => s.radiosity_at(face, point))
     }

@@ -94,6 +94,10 @@ pub struct RunResult {
     /// Rays cast answering at the evaluation points once, after the last step.
     #[serde(default)]
     pub answer_rays: u64,
+    /// Kernel evaluations spent answering at the evaluation points once, after the last step (a final
+    /// gather's point-to-polygon factors; not in `form_factors`, which counts the steps).
+    #[serde(default)]
+    pub answer_form_factors: u64,
     /// Wall seconds of rendering the run's image (camera path tracing at the paths per point reached, for
     /// `pathtrace`; primary rays through the solution's reconstruction otherwise); 0 without images.
     #[serde(default)]
@@ -154,6 +158,9 @@ pub struct TraceRow {
     /// Rays of answering at the evaluation points after this step.
     #[serde(default)]
     pub answer_rays: u64,
+    /// Kernel evaluations of answering at the evaluation points after this step.
+    #[serde(default)]
+    pub answer_form_factors: u64,
     /// Elements.
     pub elements: u64,
     /// Links.
@@ -271,23 +278,34 @@ fn evaluate(
     points: &[EvalPoint],
     reference: &[Rgb],
     weights: &[f64],
-) -> (Errors, f64, u64, Vec<Rgb>) {
+) -> (Errors, Answering, Vec<Rgb>) {
     use rayon::prelude::*;
+    let kernels0 = solution.answer_kernel_evaluations();
     let (t0, rays0) = (Instant::now(), accel.rays_cast());
     let values: Vec<Rgb> = points
         .par_iter()
         .map(|p| solution.radiosity_at(p.face, p.point))
         .collect();
-    let (secs, rays) = (
-        t0.elapsed().as_secs_f64(),
-        accel.rays_cast().saturating_sub(rays0),
-    );
+    let answering = Answering {
+        secs: t0.elapsed().as_secs_f64(),
+        rays: accel.rays_cast().saturating_sub(rays0),
+        kernels: solution
+            .answer_kernel_evaluations()
+            .saturating_sub(kernels0),
+    };
     (
         metrics::errors(&values, reference, weights),
-        secs,
-        rays,
+        answering,
         values,
     )
+}
+
+/// The cost of one answering pass at the evaluation points.
+#[derive(Clone, Copy, Debug, Default)]
+struct Answering {
+    secs: f64,
+    rays: u64,
+    kernels: u64,
 }
 
 /// Writes a run's final answers at the evaluation points beside the reference (`runs/<id>.points.csv`).
@@ -381,17 +399,17 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let every = job.evaluation.every;
     let growth = job.evaluation.growth;
     let mut next_eval = 0.0;
-    let mut last_answer = (0.0, 0u64);
+    let mut last_answer = Answering::default();
     let mut last_values = Vec::new();
     // The after-step hook evaluates outside the solver's timed region, timing the answering separately;
     // reaching the target error ends the run.
     let run = solve_loop::run(&mut *solver, limits, |s, rec| {
         let wall = rec.wall.as_secs_f64();
         if (rec.step % every == 0 && wall >= next_eval) || rec.step == 1 {
-            let (e, secs, rays, values) =
+            let (e, answering, values) =
                 evaluate(s.solution(), &accel, &points, &reference, &weights);
             last_eval = e;
-            last_answer = (secs, rays);
+            last_answer = answering;
             last_values = values;
             trace.push(row(spec, rec, s.stats().bytes, last_eval, last_answer));
             next_eval = wall * growth;
@@ -415,10 +433,10 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         Err(e) => return Err(e),
     };
     if trace.last().is_none_or(|t| t.step != rec.step) {
-        let (e, secs, rays, values) =
+        let (e, answering, values) =
             evaluate(solver.solution(), &accel, &points, &reference, &weights);
         last_eval = e;
-        last_answer = (secs, rays);
+        last_answer = answering;
         last_values = values;
         trace.push(row(
             spec,
@@ -428,7 +446,11 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             last_answer,
         ));
     }
-    (result.answer_s, result.answer_rays) = last_answer;
+    (
+        result.answer_s,
+        result.answer_rays,
+        result.answer_form_factors,
+    ) = (last_answer.secs, last_answer.rays, last_answer.kernels);
     result.outcome = outcome;
     result.steps = rec.step;
     result.wall_s = rec.wall.as_secs_f64();
@@ -511,7 +533,7 @@ fn row(
     rec: &solve_loop::StepRecord,
     bytes: u64,
     e: Errors,
-    answer: (f64, u64),
+    answer: Answering,
 ) -> TraceRow {
     let st = rec.stats;
     TraceRow {
@@ -523,8 +545,9 @@ fn row(
         step: rec.step,
         wall_s: rec.wall.as_secs_f64(),
         cpu_s: rec.cpu.as_secs_f64(),
-        answer_s: answer.0,
-        answer_rays: answer.1,
+        answer_s: answer.secs,
+        answer_rays: answer.rays,
+        answer_form_factors: answer.kernels,
         elements: st.elements,
         links: st.links,
         form_factors: st.form_factors,
