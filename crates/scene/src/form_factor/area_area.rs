@@ -19,6 +19,7 @@
 
 use super::gauss_legendre;
 use glam::DVec3;
+use smallvec::SmallVec;
 
 use crate::{Accel, FaceId, Polygon, Segment, sampling};
 
@@ -117,15 +118,10 @@ pub fn visibility_fraction(
                 perm.swap(k, j);
             }
             let (na, nb) = (a.normal(), b.normal());
-            // The facing pairs and their kernels, then their visibility as one packet.
-            let mut weights = [0.0; 64];
-            let mut segments = [Segment {
-                p: DVec3::ZERO,
-                fp: fa,
-                q: DVec3::ZERO,
-                fq: fb,
-            }; 64];
-            let mut facing_pairs = 0;
+            // The facing pairs and their kernels, then their visibility as one packet (held inline, filled
+            // only as far as this estimate's rays: most cast 4 or 16, not 64).
+            let mut weights: SmallVec<[f64; 64]> = SmallVec::new();
+            let mut segments: SmallVec<[Segment; 64]> = SmallVec::new();
             for (k, &m) in perm.iter().enumerate().take(total) {
                 let m = m as usize;
                 let u =
@@ -136,14 +132,19 @@ pub fn visibility_fraction(
                 if w <= 0.0 {
                     continue;
                 }
-                weights[facing_pairs] = w;
-                (segments[facing_pairs].p, segments[facing_pairs].q) = (x, y);
-                facing_pairs += 1;
+                weights.push(w);
+                segments.push(Segment {
+                    p: x,
+                    fp: fa,
+                    q: y,
+                    fq: fb,
+                });
             }
             let mut visible = [false; 64];
-            accel.visible_many(&segments[..facing_pairs], &mut visible[..facing_pairs]);
+            let visible = &mut visible[..segments.len()];
+            accel.visible_many(&segments, visible);
             let (mut seen, mut facing) = (0.0, 0.0);
-            for (&w, &v) in weights.iter().zip(&visible).take(facing_pairs) {
+            for (&w, &v) in weights.iter().zip(visible.iter()) {
                 facing += w;
                 if v {
                     seen += w;
