@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use radlab_scene::{Accel, EvalPoint, MethodParams, Rgb, Solution};
+use radlab_scene::{Accel, EvalPoint, MethodParams, Rgb, Solver};
 use serde::{Deserialize, Serialize};
 
 use super::config::{Evaluation, LimitsConfig, OutputsConfig, ReferenceKind, RunSpec};
@@ -270,16 +270,18 @@ pub fn read_result(path: &Path) -> Result<RunResult> {
     serde_json::from_str(&text).with_context(|| format!("{}: malformed run result", path.display()))
 }
 
-/// Errors of the solution at the points, with the wall time and rays answering took: answering is part of a
-/// method's cost (a final gather casts rays at every query), charged once per evaluation.
+/// Errors of the solver's solution at the points, with what answering took (wall time, rays, kernel
+/// evaluations) and the memory held after it: answering is part of a method's cost (a final gather casts rays
+/// at every query), charged once per evaluation.
 fn evaluate(
-    solution: &dyn Solution,
+    solver: &dyn Solver,
     accel: &Accel,
     points: &[EvalPoint],
     reference: &[Rgb],
     weights: &[f64],
 ) -> (Errors, Answering, Vec<Rgb>) {
     use rayon::prelude::*;
+    let solution = solver.solution();
     let kernels0 = solution.answer_kernel_evaluations();
     let (t0, rays0) = (Instant::now(), accel.rays_cast());
     let values: Vec<Rgb> = points
@@ -292,6 +294,7 @@ fn evaluate(
         kernels: solution
             .answer_kernel_evaluations()
             .saturating_sub(kernels0),
+        bytes: solver.stats().bytes,
     };
     (
         metrics::errors(&values, reference, weights),
@@ -300,12 +303,14 @@ fn evaluate(
     )
 }
 
-/// The cost of one answering pass at the evaluation points.
+/// The cost of one answering pass at the evaluation points, and the memory the solver holds after it (what
+/// answering built included: Gouraud vertices, a final gather's sources and near values).
 #[derive(Clone, Copy, Debug, Default)]
 struct Answering {
     secs: f64,
     rays: u64,
     kernels: u64,
+    bytes: u64,
 }
 
 /// Writes a run's final answers at the evaluation points beside the reference (`runs/<id>.points.csv`).
@@ -406,12 +411,11 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let run = solve_loop::run(&mut *solver, limits, |s, rec| {
         let wall = rec.wall.as_secs_f64();
         if (rec.step % every == 0 && wall >= next_eval) || rec.step == 1 {
-            let (e, answering, values) =
-                evaluate(s.solution(), &accel, &points, &reference, &weights);
+            let (e, answering, values) = evaluate(s, &accel, &points, &reference, &weights);
             last_eval = e;
             last_answer = answering;
             last_values = values;
-            trace.push(row(spec, rec, s.stats().bytes, last_eval, last_answer));
+            trace.push(row(spec, rec, last_eval, last_answer));
             next_eval = wall * growth;
             if target > 0.0 && last_eval.l1 <= target {
                 anyhow::bail!(TargetReached);
@@ -433,24 +437,24 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         Err(e) => return Err(e),
     };
     if trace.last().is_none_or(|t| t.step != rec.step) {
-        let (e, answering, values) =
-            evaluate(solver.solution(), &accel, &points, &reference, &weights);
+        let (e, answering, values) = evaluate(&*solver, &accel, &points, &reference, &weights);
         last_eval = e;
         last_answer = answering;
         last_values = values;
-        trace.push(row(
-            spec,
-            &rec,
-            solver.stats().bytes,
-            last_eval,
-            last_answer,
-        ));
+        trace.push(row(spec, &rec, last_eval, last_answer));
     }
+    // Memory is read once the solution has answered, so it holds what answering built, as its time and rays do.
     (
         result.answer_s,
         result.answer_rays,
         result.answer_form_factors,
-    ) = (last_answer.secs, last_answer.rays, last_answer.kernels);
+        result.bytes,
+    ) = (
+        last_answer.secs,
+        last_answer.rays,
+        last_answer.kernels,
+        last_answer.bytes,
+    );
     result.outcome = outcome;
     result.steps = rec.step;
     result.wall_s = rec.wall.as_secs_f64();
@@ -461,11 +465,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         result.links,
         result.form_factors,
         result.rays,
-        result.bytes,
-    ) = (st.elements, st.links, st.form_factors, st.rays, st.bytes);
-    // Memory is read once the solution has answered, so it holds what answering built (Gouraud vertices, a
-    // final gather's sources and near values), as its time and rays do.
-    result.bytes = solver.stats().bytes;
+    ) = (st.elements, st.links, st.form_factors, st.rays);
     (result.l1, result.l2, result.max) = (last_eval.l1, last_eval.l2, last_eval.max);
     write_bytes(&trace_path(&job.dir, &result.id), |w| {
         let mut out = csv::Writer::from_writer(w);
@@ -527,14 +527,8 @@ impl std::fmt::Display for TargetReached {
 }
 impl std::error::Error for TargetReached {}
 
-/// A trace row: the step's record, with `bytes` held after the answering pass.
-fn row(
-    spec: &RunSpec,
-    rec: &solve_loop::StepRecord,
-    bytes: u64,
-    e: Errors,
-    answer: Answering,
-) -> TraceRow {
+/// A trace row: the step's record, with its answering pass (and the bytes held after it).
+fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors, answer: Answering) -> TraceRow {
     let st = rec.stats;
     TraceRow {
         id: spec.id(),
@@ -552,7 +546,7 @@ fn row(
         links: st.links,
         form_factors: st.form_factors,
         rays: st.rays,
-        bytes,
+        bytes: answer.bytes,
         residual: st.residual,
         l1: e.l1,
         l2: e.l2,
