@@ -32,10 +32,12 @@
 //!
 //! The face values B_j are the solution's constant answers (E + ρ max(0, n·e) from the deepest cluster
 //! above face j, or the patch leaves where the refinement split it), computed with the power vectors of
-//! every node in one pass over the faces after each step: the one part linear in k, as output is. Unlike the
-//! flat gather over elements, a near face is gathered with its mean value (no sub-polygon near field: gathering
-//! near faces as 4 × 4 sub-polygons with their Gouraud values was tried and moved the error on the 10⁵-face
-//! bumpy sphere and terrain by less than 0.002%, so it was left out).
+//! every node in one pass over the faces after each step: the one part linear in k, as output is. A near face
+//! is gathered with its mean value (gathering near faces as 4 × 4 sub-polygons with their Gouraud values was
+//! tried and moved the error on the 10⁵-face bumpy sphere and terrain by less than 0.002%). At θ = 0,
+//! [`NearField::SubPolygons`] hands the same values to the shared final gather instead, whose near field
+//! re-gathers each near face's sub-polygons at their own points (see there), with the far part of those
+//! re-gathers from this tree gather ([`TreeFarField`]).
 //!
 //! With [`GatherValues::Gathered`] the values themselves come from a gather first: each face's value (and each
 //! patch leaf's) is this same gather over the solution's values at its centroid, at a coarser opening, and the
@@ -50,7 +52,7 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
-use radlab_scene::final_gather::{GatherSettings, query_key};
+use radlab_scene::final_gather::{FarField, GatherSettings, query_key};
 use radlab_scene::form_factor::point_polygon;
 use radlab_scene::gouraud::ElementValue;
 use radlab_scene::sampling::{self, mix64};
@@ -89,6 +91,34 @@ impl GatherValues {
         match self {
             Self::Solution => "solution",
             Self::Gathered => "gathered",
+        }
+    }
+}
+
+/// How the flat final gather (`gather_opening = 0`) treats faces near the query point (parameter
+/// `near_field`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NearField {
+    /// Every face by its exact point-to-polygon factor and its one value (this module's gather). The default.
+    #[default]
+    Off,
+    /// Through radlab-scene's shared final gather over the same values ([`radlab_scene::final_gather`], the
+    /// gather every finite-element method answers with): a face nearer the point than its diameter is
+    /// gathered as 4 × 4 sub-polygons, each with its own visibility ray and a radiosity re-gathered at it
+    /// (Lischinski, Tampieri & Greenberg 1993), so light moves within the face toward its lit side. The far
+    /// part of those values comes from this module's tree gather at [`DEFAULT_OPENING`] ([`TreeFarField`]), so
+    /// the first time a face is near some query it costs one tree gather at its centroid and its near set's
+    /// 64 points, not a pass over every face; each query is still the flat gather, O(k).
+    SubPolygons,
+}
+
+impl NearField {
+    /// The name used in parameters.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::SubPolygons => "sub-polygons",
         }
     }
 }
@@ -256,12 +286,24 @@ impl ClusterGather {
         face: FaceId,
         point: DVec3,
     ) -> Rgb {
-        let (tree, scene, centroid) = (&ctx.tree, ctx.scene, &ctx.centroid);
-        let n = scene.faces[face].normal;
+        let scene = ctx.scene;
         let (rho, e) = (scene.reflectance(face), scene.emission(face));
         if rho.max_element() <= 0.0 {
             return e;
         }
+        e + rho * self.irradiance_at(ctx, accel, face, point)
+    }
+
+    /// Σ_j F V B_j at `point` on `face`: what [`ClusterGather::radiosity_at`] multiplies by ρ.
+    pub fn irradiance_at(
+        &self,
+        ctx: &FaceContext<'_>,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+    ) -> Rgb {
+        let (tree, scene, centroid) = (&ctx.tree, ctx.scene, &ctx.centroid);
+        let n = scene.faces[face].normal;
         let key = query_key(scene, face, point);
         let mut r = sampling::rng(self.settings.seed, key ^ mix64(u64::MAX));
         let (mut rays, mut kernels) = (0u64, 0u64);
@@ -329,7 +371,7 @@ impl ClusterGather {
         }
         self.rays.fetch_add(rays, Ordering::Relaxed);
         self.kernels.fetch_add(kernels, Ordering::Relaxed);
-        e + rho * sum
+        sum
     }
 
     /// F V B of input face `f` (or of its patch leaves) at `point` on `face`, exactly.
@@ -367,17 +409,47 @@ impl ClusterGather {
                 .enumerate()
                 .map(|(i, el)| one(el, mix64(f as u64) ^ i as u64, rays, kernels))
                 .fold(Rgb::ZERO, |a, b| a + b),
-            None => {
-                let polygon = scene.polygon(f);
-                let el = ElementValue {
-                    face: f,
-                    polygon,
-                    radiosity: self.face_radiosity[f],
-                    open: 1.0,
-                };
-                one(&el, f as u64, rays, kernels)
+            None => one(&self.whole_face(scene, f), f as u64, rays, kernels),
+        }
+    }
+
+    /// Input face `f` as one source element with its value.
+    fn whole_face(&self, scene: &Scene, f: FaceId) -> ElementValue {
+        ElementValue {
+            face: f,
+            polygon: scene.polygon(f),
+            radiosity: self.face_radiosity[f],
+            open: 1.0,
+        }
+    }
+
+    /// The values as a flat list of source elements, in face order: each input face with its value, or its
+    /// patch leaves where the refinement split it (what [`NearField::SubPolygons`] gathers).
+    pub fn elements(&self, scene: &Scene) -> Vec<ElementValue> {
+        let mut out = Vec::with_capacity(self.face_radiosity.len());
+        for f in 0..self.face_radiosity.len() {
+            match self.patches.get(&f) {
+                Some(leaves) => out.extend_from_slice(leaves),
+                None => out.push(self.whole_face(scene, f)),
             }
         }
+        out
+    }
+}
+
+/// This gather as the far part of the shared final gather's near field ([`NearField::SubPolygons`]).
+pub struct TreeFarField<'g, 'a> {
+    /// The gather over the tree (its opening, its values).
+    pub gather: &'g ClusterGather,
+    /// The tree and scene the values were made for.
+    pub ctx: &'g FaceContext<'a>,
+    /// The scene's rays.
+    pub accel: &'g Accel,
+}
+
+impl FarField for TreeFarField<'_, '_> {
+    fn irradiance(&self, face: FaceId, point: DVec3) -> Rgb {
+        self.gather.irradiance_at(self.ctx, self.accel, face, point)
     }
 }
 

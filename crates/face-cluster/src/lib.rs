@@ -221,7 +221,9 @@ pub mod vector_transport;
 
 pub use bounds::{NormalCone, OrientedBox, Sphere};
 pub use cache::{Digest, digest, digest_hex};
-pub use cluster_gather::{ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues};
+pub use cluster_gather::{
+    ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues, NearField,
+};
 pub use contraction::{ContractionStats, MergeCost};
 pub use error::FaceClusterError;
 pub use face_node::{ClusterRef, FaceContext, FaceNode};

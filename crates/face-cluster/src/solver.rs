@@ -29,6 +29,9 @@
 //! its mesh, tens of millions of gathers at 10⁶ faces, where Gouraud answers cost seconds. With
 //! `gather_values = "gathered"` the values it reads are themselves gathered first, at every face's centroid
 //! (a second bounce: [`crate::cluster_gather`]), for k more gathers a solution, also charged to answering.
+//! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-scene's shared final
+//! gather over the same values, whose near field re-gathers faces close to the point as sub-polygons
+//! ([`NearField`]); its rays, kernel evaluations and bytes are charged to answering as well.
 
 use std::sync::{Arc, OnceLock};
 
@@ -36,6 +39,7 @@ use glam::DVec3;
 use radlab_hierarchical::{
     Engine, ErrorNorm, HierarchicalParams, LinearState, NodeKind, PatchKernel, SurfaceOutput,
 };
+use radlab_scene::final_gather::{FinalGather, GatherSettings};
 use radlab_scene::gouraud::{ElementValue, interpolate_corners};
 use radlab_scene::{
     Accel, FaceId, MethodParams, Reconstruction, Rgb, Scene, Solution, SolveError, Solver, Stats,
@@ -48,7 +52,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::cluster_gather::{
-    ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues, area_mean,
+    ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues, NearField, TreeFarField,
+    area_mean,
 };
 use crate::face_node::{FaceContext, FaceNode};
 use crate::irradiance_gradient::IrradianceField;
@@ -102,6 +107,10 @@ pub struct FaceClusterSolveParams {
     /// The values' gather's opening in [0, 1) under [`GatherValues::Gathered`]. Default
     /// [`DEFAULT_VALUES_OPENING`].
     pub values_opening: f64,
+    /// How the flat final gather (`gather_opening = 0`) takes faces near the query point ([`NearField`]).
+    /// Default [`NearField::Off`].
+    #[serde(default)]
+    pub near_field: NearField,
 }
 
 impl Default for FaceClusterSolveParams {
@@ -126,6 +135,7 @@ impl Default for FaceClusterSolveParams {
             gather_opening: DEFAULT_OPENING,
             gather_values: GatherValues::Solution,
             values_opening: DEFAULT_VALUES_OPENING,
+            near_field: NearField::Off,
         }
     }
 }
@@ -197,6 +207,15 @@ impl MethodParams for FaceClusterSolveParams {
             "gather_values = \"gathered\" only: the values' gather's opening in [0, 1) (default 0.5)",
         ));
         d.push((
+            "near_field",
+            "final-gather with gather_opening = 0 only: off (default: every face by its exact factor and its one \
+             value) | sub-polygons (the flat gather through the shared final gather every finite-element method \
+             answers with: a face nearer the point than its diameter is taken as 4 x 4 sub-polygons, each with \
+             its own visibility ray and a radiosity re-gathered at it, so light moves within the face toward its \
+             lit side, the far part of its light from the tree gather at the default opening; charged to \
+             answering)",
+        ));
+        d.push((
             "self_exchange",
             "traced (default: `self_rays` rays from every face before the solve estimate every node's self form \
              factor and its children's exchange, carried evenly by nodes of 32 faces or more that mostly face one \
@@ -266,6 +285,10 @@ impl MethodParams for FaceClusterSolveParams {
                     format!("\"{}\"", d.gather_values.as_str()),
                 ),
                 ("values_opening".to_string(), d.values_opening.to_string()),
+                (
+                    "near_field".to_string(),
+                    format!("\"{}\"", d.near_field.as_str()),
+                ),
             ])
             .collect()
     }
@@ -305,14 +328,20 @@ impl MethodParams for FaceClusterSolveParams {
                 }
             },
         };
-        let gather_given = ["gather_opening", "gather_values", "values_opening"]
-            .into_iter()
-            .find_map(|k| Some((k, table.get(k)?.to_string())));
+        let gather_given = [
+            "gather_opening",
+            "gather_values",
+            "values_opening",
+            "near_field",
+        ]
+        .into_iter()
+        .find_map(|k| Some((k, table.get(k)?.to_string())));
         let values_given = table.get("values_opening").map(|v| v.to_string());
         let gather_opening = opening(&mut table, "gather_opening", DEFAULT_OPENING)?;
         let values_opening = opening(&mut table, "values_opening", DEFAULT_VALUES_OPENING)?;
         let gather_values: GatherValues =
             choice(&mut table, "gather_values", "solution or gathered")?;
+        let near_field: NearField = choice(&mut table, "near_field", "off or sub-polygons")?;
         let mut full = toml::Table::try_from(Self::default().engine)
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
@@ -341,6 +370,16 @@ impl MethodParams for FaceClusterSolveParams {
                 ),
             ));
         }
+        if near_field != NearField::Off && gather_opening != 0.0 {
+            return Err(SolveError::param(
+                "near_field",
+                format!(
+                    "near_field = \"{}\" is a treatment of the flat gather over every face, and \
+                     gather_opening is {gather_opening}; set gather_opening = 0 or remove near_field",
+                    near_field.as_str()
+                ),
+            ));
+        }
         Ok(Self {
             engine,
             cache_dir,
@@ -351,6 +390,7 @@ impl MethodParams for FaceClusterSolveParams {
             gather_opening,
             gather_values,
             values_opening,
+            near_field,
         })
     }
 }
@@ -423,6 +463,11 @@ pub struct FaceClusterSolver<'a> {
     gather_values: GatherValues,
     /// The values' gather's opening under [`GatherValues::Gathered`].
     values_opening: f64,
+    /// How the flat final gather takes near faces.
+    near_field: NearField,
+    /// The shared final gather over the values, under [`NearField::SubPolygons`], built at the first query
+    /// after a step.
+    flat: OnceLock<FinalGather>,
     /// Rays and kernel evaluations of final gathers over earlier solutions.
     past_gather_work: (u64, u64),
     seed: u64,
@@ -529,6 +574,8 @@ impl<'a> FaceClusterSolver<'a> {
             gather: OnceLock::new(),
             gather_values: params.gather_values,
             values_opening: params.values_opening,
+            near_field: params.near_field,
+            flat: OnceLock::new(),
             past_gather_work: (0, 0),
             seed,
             scanned: 0,
@@ -597,7 +644,8 @@ impl<'a> FaceClusterSolver<'a> {
             .vertex_adjacency
             .get()
             .map_or(0, VertexAdjacency::bytes)
-            + self.gather.get().map_or(0, ClusterGather::bytes);
+            + self.gather.get().map_or(0, ClusterGather::bytes)
+            + self.flat.get().map_or(0, FinalGather::bytes);
         let mut s = self.engine.stats(
             self.rays,
             self.output.bytes()
@@ -615,6 +663,10 @@ impl<'a> FaceClusterSolver<'a> {
         self.output.update(&self.engine, self.scene.face_count());
         self.face_fields = OnceLock::new();
         if let Some(g) = self.gather.take() {
+            self.past_gather_work.0 += g.rays();
+            self.past_gather_work.1 += g.kernel_evaluations();
+        }
+        if let Some(g) = self.flat.take() {
             self.past_gather_work.0 += g.rays();
             self.past_gather_work.1 += g.kernel_evaluations();
         }
@@ -699,10 +751,36 @@ impl<'a> FaceClusterSolver<'a> {
     /// Rays and kernel evaluations the final gather has spent answering so far (charged to answering, not to
     /// the steps).
     pub fn gather_work(&self) -> (u64, u64) {
-        let (r, k) = self.past_gather_work;
-        self.gather
-            .get()
-            .map_or((r, k), |g| (r + g.rays(), k + g.kernel_evaluations()))
+        let (mut r, mut k) = self.past_gather_work;
+        if let Some(g) = self.gather.get() {
+            (r, k) = (r + g.rays(), k + g.kernel_evaluations());
+        }
+        if let Some(g) = self.flat.get() {
+            (r, k) = (r + g.rays(), k + g.kernel_evaluations());
+        }
+        (r, k)
+    }
+
+    /// The shared final gather over the values of [`FaceClusterSolver::cluster_gather`]
+    /// ([`NearField::SubPolygons`]), answering `point` on `face`. The tree gather at the default opening
+    /// gives the far part of near faces' values ([`TreeFarField`]), so a face near a query costs a tree gather
+    /// at its centroid rather than a pass over every face. The tree gather's work (and a gathered values'
+    /// pass) is counted by it, the flat gather's by the shared gather.
+    fn near_field_answer(&self, face: FaceId, point: DVec3) -> Rgb {
+        let tree = self.cluster_gather(DEFAULT_OPENING);
+        let flat = self.flat.get_or_init(|| {
+            FinalGather::new(
+                self.scene,
+                &tree.elements(self.scene),
+                GatherSettings::with_seed(self.seed),
+            )
+        });
+        let far = TreeFarField {
+            gather: tree,
+            ctx: &self.ctx,
+            accel: self.accel,
+        };
+        flat.radiosity_with(self.scene, self.accel, face, point, Some(&far))
     }
 
     /// The final gather's values for the current solution: every input face's constant answer at its
@@ -814,6 +892,9 @@ impl Solution for FaceClusterSolver<'_> {
             return Rgb::ZERO;
         }
         if let Some(opening) = self.gather_opening {
+            if self.near_field == NearField::SubPolygons {
+                return self.near_field_answer(face, point);
+            }
             return self
                 .cluster_gather(opening)
                 .radiosity_at(&self.ctx, self.accel, face, point);

@@ -1,8 +1,9 @@
 //! The final gather over the face-cluster tree (`reconstruction = "final-gather"`): exact against Howell's
 //! closed forms where every node is opened or the light is an emitter, within the point transfer's (R/r)²
 //! where a far node is gathered whole, a closed sphere's factors summing to one, a per-query cost that grows
-//! far slower than the faces, the solver's answers in a furnace and across thread counts, and gathered
-//! values (a second bounce) as one Jacobi iteration with its work counted.
+//! far slower than the faces, the solver's answers in a furnace and across thread counts, gathered values (a
+//! second bounce) as one Jacobi iteration with its work counted, and the flat gather's near field
+//! (`near_field = "sub-polygons"`) exact for direct light, in the furnace, and with its work counted.
 
 mod common;
 use common::{params, solve, try_params};
@@ -12,7 +13,7 @@ use std::collections::HashMap;
 use glam::dvec3;
 use radlab_face_cluster::{
     ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
-    FaceContext, GatherValues,
+    FaceContext, GatherValues, NearField,
 };
 use radlab_scene::form_factor::closed_form::point_to_parallel_rectangle_corner as corner;
 use radlab_scene::{Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, builtin};
@@ -243,7 +244,8 @@ fn work_per_query_grows_far_slower_than_the_faces() {
 
 /// Direct light from an emitter (ρ = 0, so B = E whatever the solve) onto a parallel receiver: emitters are
 /// always opened down to their faces, so the solver's final-gather answer is ρ E times Howell's factor
-/// (1e-12) at every opening, whatever ε left in the solution.
+/// (1e-12) at every opening, whatever ε left in the solution, and so is the flat gather with its near field
+/// (which moves light within non-emitting faces only).
 #[test]
 fn direct_light_from_an_emitter_is_exact_at_every_opening() {
     let (w, d, h, e, rho) = (1.0, 0.6, 0.7, 2.0, 0.4);
@@ -252,10 +254,16 @@ fn direct_light_from_an_emitter_is_exact_at_every_opening() {
     ))
     .expect("scene");
     let accel = Accel::new(&scene);
-    for opening in ["0", "0.25", "0.9"] {
+    for (opening, near_field) in [
+        ("0", "\"off\""),
+        ("0.25", "\"off\""),
+        ("0.9", "\"off\""),
+        ("0", "\"sub-polygons\""),
+    ] {
         let p = params(&[
             ("reconstruction", "final-gather"),
             ("gather_opening", opening),
+            ("near_field", near_field),
             ("epsilon", "0.01"),
         ]);
         let mut s = FaceClusterSolver::new(&scene, &accel, p, 7).expect("solver");
@@ -269,7 +277,7 @@ fn direct_light_from_an_emitter_is_exact_at_every_opening() {
             let want = rho * e * to_rectangle(x, y, w, d, h);
             assert!(
                 (b - want).abs() <= 1e-12 * want,
-                "opening {opening}, ({x}, {y}): {b} vs {want}"
+                "opening {opening}, near field {near_field}, ({x}, {y}): {b} vs {want}"
             );
         }
     }
@@ -278,35 +286,42 @@ fn direct_light_from_an_emitter_is_exact_at_every_opening() {
 /// Concentric spheres, every face E = 1 and ρ = 0.5, a furnace: B = 2 everywhere. The final gather at every
 /// face's centroid, over the solve at ε = 1e-3 with one ray per link, has an area mean within 1% of 2
 /// (measured 2.0036; 2.0004 over gathered values) and the same bits on one and two threads, over the
-/// solution's values and over gathered ones.
+/// solution's values and over gathered ones, by the tree gather and by the flat gather with its near field.
 #[test]
 fn final_gather_holds_the_furnace_on_any_thread_count() {
     let scene = builtin("concentric-spheres?faces=600&reflectance=0.5").expect("scene");
     let accel = Accel::new(&scene);
-    let run = |threads: usize, values: &str| {
+    let run = |threads: usize, values: &str, flat: &[(&str, &str)]| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .expect("pool");
         pool.install(|| {
-            let p = params(&[
+            let mut pairs = vec![
                 ("reconstruction", "final-gather"),
                 ("epsilon", "0.001"),
                 ("visibility", "centre"),
                 ("gather_values", values),
-            ]);
-            let mut s = FaceClusterSolver::new(&scene, &accel, p, 3).expect("solver");
+            ];
+            pairs.extend_from_slice(flat);
+            let mut s = FaceClusterSolver::new(&scene, &accel, params(&pairs), 3).expect("solver");
             solve(&mut s);
             s.face_radiosity()
         })
     };
-    for values in ["\"solution\"", "\"gathered\""] {
-        let (one, two) = (run(1, values), run(2, values));
+    let near = [("gather_opening", "0"), ("near_field", "\"sub-polygons\"")];
+    for (values, flat) in [
+        ("\"solution\"", &[][..]),
+        ("\"gathered\"", &[][..]),
+        ("\"solution\"", &near[..]),
+        ("\"gathered\"", &near[..]),
+    ] {
+        let (one, two) = (run(1, values, flat), run(2, values, flat));
         let total: f64 = one.iter().map(|x| x.1).sum();
         let mean = one.iter().map(|x| x.1 * x.2.x).sum::<f64>() / total;
         assert!(
             (mean - 2.0).abs() <= 0.02,
-            "{values}: area-mean B = {mean}, want 2"
+            "{values} {flat:?}: area-mean B = {mean}, want 2"
         );
         for (a, b) in one.iter().zip(&two) {
             assert_eq!(
@@ -380,5 +395,77 @@ fn gathered_values_parameters_are_checked() {
         (ok.gather_values, ok.values_opening),
         (GatherValues::Gathered, 0.25)
     );
+    assert!(ok.validate().is_ok());
+}
+
+/// The near field's work is charged to answering: the flat gather with `near_field = "sub-polygons"` reports
+/// its kernel evaluations (at least one per face in front of each query, and more than the same queries cost
+/// without the near field, since near faces are re-gathered as 16 sub-polygons) and the bytes of its
+/// near-field values, which a new step releases.
+#[test]
+fn near_field_work_and_memory_are_counted() {
+    let scene = builtin("terrain?faces=400&relief=0.5").expect("scene");
+    let accel = Accel::new(&scene);
+    let answer = |near_field: &str| {
+        let p = params(&[
+            ("reconstruction", "final-gather"),
+            ("gather_opening", "0"),
+            ("near_field", near_field),
+            ("epsilon", "0.001"),
+        ]);
+        let mut s = FaceClusterSolver::new(&scene, &accel, p, 11).expect("solver");
+        solve(&mut s);
+        let before = radlab_scene::Solver::stats(&s).bytes;
+        let queries = (0..scene.face_count()).step_by(7).count() as u64;
+        for f in (0..scene.face_count()).step_by(7) {
+            s.radiosity_at(f, scene.faces[f].centroid);
+        }
+        let after = radlab_scene::Solver::stats(&s).bytes;
+        (s.answer_kernel_evaluations(), queries, before, after)
+    };
+    let (off, queries, ..) = answer("\"off\"");
+    let (near, _, before, after) = answer("\"sub-polygons\"");
+    assert!(
+        off >= queries,
+        "without the near field: {off} for {queries} queries"
+    );
+    assert!(
+        near > off,
+        "near field {near} kernels against {off} without"
+    );
+    assert!(
+        after > before,
+        "bytes {before} before answering, {after} after"
+    );
+}
+
+/// `near_field` takes off or sub-polygons, and only for the flat final gather (final-gather answers at
+/// gather_opening = 0); each refusal names the key and the fix.
+#[test]
+fn near_field_parameters_are_checked() {
+    let refused = |pairs: &[(&str, &str)]| try_params(pairs).expect_err("refused").to_string();
+    let fg = ("reconstruction", "final-gather");
+    let sub = ("near_field", "\"sub-polygons\"");
+    let err = refused(&[fg, ("gather_opening", "0"), ("near_field", "\"near\"")]);
+    assert!(
+        err.contains("near_field") && err.contains("off or sub-polygons"),
+        "{err}"
+    );
+    let err = refused(&[sub]);
+    assert!(
+        err.contains("near_field") && err.contains("final-gather"),
+        "{err}"
+    );
+    for opening in [None, Some("0.1")] {
+        let mut pairs = vec![fg, sub];
+        pairs.extend(opening.map(|o| ("gather_opening", o)));
+        let err = refused(&pairs);
+        assert!(
+            err.contains("near_field") && err.contains("gather_opening = 0"),
+            "{opening:?}: {err}"
+        );
+    }
+    let ok = params(&[fg, ("gather_opening", "0"), sub]);
+    assert_eq!(ok.near_field, NearField::SubPolygons);
     assert!(ok.validate().is_ok());
 }
