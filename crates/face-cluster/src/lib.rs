@@ -52,7 +52,8 @@
 //! its own orientation ([`FaceClusterSolver`]); `reconstruction = "final-gather"` answers each point by one
 //! more gather over the tree ([`cluster_gather`]: far nodes by their power vectors, `gather_opening` 0.25 by
 //! default, near faces and emitters by exact point-to-polygon factors), the most accurate of the three at a
-//! cost per point that grows as log k.
+//! cost per point that grows as log k; at `gather_opening = 0`, `near_field = "sub-polygons"` gathers through
+//! the shared final gather with its near field, its far light from the tree gather.
 //!
 //! Measured with Gouraud answers, the linear field and the traced exchange pushed down by where it lands (the
 //! defaults, 32 trace rays a face; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,
