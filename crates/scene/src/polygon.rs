@@ -132,7 +132,7 @@ impl Polygon {
         AreaSampler::new(*self).sample(u1, u2)
     }
 
-    /// A point from parameters (s, t) in [0,1]²: bilinear over a quad, the square-root map over a triangle.
+    /// A point from parameters (s, t) in \[0, 1\]²: bilinear over a quad, the square-root map over a triangle.
     /// Stratifying (s, t) stratifies the polygon (exactly uniform for triangles and parallelograms).
     pub fn point_at(&self, s: f64, t: f64) -> DVec3 {
         let v = &self.verts;
