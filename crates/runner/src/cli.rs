@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 
 use std::path::PathBuf;
 
-use crate::commands::{catalogue, probe, render, solve};
+use crate::commands::{catalogue, compare, probe, render, solve};
 use crate::experiment;
 
 /// radlab: radiosity and Monte Carlo methods side by side on the same scenes, measured the same way.
@@ -41,6 +41,9 @@ pub enum Command {
         /// The experiment's results directory.
         dir: PathBuf,
     },
+    /// Compare runs' answers at the evaluation points (runs/<id>.points.csv): L1, bias, and each pair's
+    /// difference with a bootstrap interval.
+    Compare(compare::CompareArgs),
     /// Merge the results of shards (directories of `radlab run --shard`) into one directory.
     Merge {
         /// The merged results directory.
@@ -74,6 +77,7 @@ pub fn main() -> Result<()> {
         Command::RunOne { job } => experiment::execute::run_child(job),
         Command::Solve(a) => solve::run(a),
         Command::Probe(a) => probe::run(a),
+        Command::Compare(a) => compare::run(a),
         Command::Render(a) => render::run(a),
         Command::Scenes => {
             catalogue::scenes();

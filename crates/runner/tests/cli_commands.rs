@@ -305,3 +305,119 @@ fn catalogues_list_everything() {
         assert!(t.contains(s), "scenes lacks {s}");
     }
 }
+
+/// A points file as `radlab run` writes it: reference 1 + i/n at n points, answers `value(i, reference)`.
+fn write_points_file(path: &Path, n: usize, value: impl Fn(usize, f64) -> String) {
+    let mut s =
+        String::from("point,face,x,y,z,ref_r,ref_g,ref_b,se_r,se_g,se_b,r,g,b,rel_error,z_score\n");
+    for i in 0..n {
+        let r = 1.0 + i as f64 / n as f64;
+        let v = value(i, r);
+        s += &format!("{i},{i},{i},0,0,{r},{r},{r},0.001,0.001,0.001,{v},{v},{v},0,0\n");
+    }
+    std::fs::write(path, s).expect("write points");
+}
+
+#[test]
+fn compare_ranks_runs_and_rejects_bad_files() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let p = |name: &str| tmp.path().join(name).to_str().expect("utf8").to_string();
+    // a: 1% high everywhere; b: 3% high at every other point; c: a's errors with the sign flipped at every
+    // third point (the same L1).
+    write_points_file(Path::new(&p("a.points.csv")), 300, |_, r| {
+        (r * 1.01).to_string()
+    });
+    write_points_file(Path::new(&p("b.points.csv")), 300, |i, r| {
+        (r * if i % 2 == 0 { 1.03 } else { 1.0 }).to_string()
+    });
+    write_points_file(Path::new(&p("c.points.csv")), 300, |i, r| {
+        (r * if i % 3 == 0 { 0.99 } else { 1.01 }).to_string()
+    });
+    let args = [
+        "compare",
+        &p("a.points.csv"),
+        &p("b.points.csv"),
+        &p("c.points.csv"),
+    ];
+    let o = radlab(tmp.path(), &args);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("| a | 1.0000% | +1.0000% |"), "{out}");
+    assert!(
+        out.contains("| a | b |") && out.contains("a lower"),
+        "{out}"
+    );
+    assert!(
+        out.lines()
+            .any(|l| l.starts_with("| a | c | +0.0000%")
+                && l.ends_with("level within the interval |")),
+        "{out}"
+    );
+    // The same command again gives the same intervals.
+    assert_eq!(radlab(tmp.path(), &args).stdout, o.stdout);
+
+    // A row that is not a number, a NaN answer, a missing file, one run alone, different references.
+    let bad = p("bad.points.csv");
+    write_points_file(Path::new(&bad), 3, |i, r| {
+        if i == 1 { "oops".into() } else { r.to_string() }
+    });
+    let nan = p("nan.points.csv");
+    write_points_file(Path::new(&nan), 3, |i, r| {
+        if i == 2 { "NaN".into() } else { r.to_string() }
+    });
+    let other = p("other.points.csv");
+    std::fs::write(
+        &other,
+        std::fs::read_to_string(p("a.points.csv"))
+            .expect("a")
+            .replacen(",1,1,1,0.001", ",1.5,1.5,1.5,0.001", 1),
+    )
+    .expect("write");
+    for (args, want) in [
+        (
+            vec!["compare", bad.as_str(), &p("a.points.csv")],
+            "bad.points.csv: row 2",
+        ),
+        (
+            vec!["compare", nan.as_str(), &p("a.points.csv")],
+            "row 3: column r is NaN",
+        ),
+        (
+            vec!["compare", &p("missing.points.csv"), &p("a.points.csv")],
+            "missing.points.csv: cannot read",
+        ),
+        (vec!["compare", &p("a.points.csv")], "required"),
+        (
+            vec!["compare", &p("a.points.csv"), other.as_str()],
+            "--reference",
+        ),
+        (
+            vec![
+                "compare",
+                &p("a.points.csv"),
+                &p("b.points.csv"),
+                "--resamples",
+                "5",
+            ],
+            "--resamples 5",
+        ),
+    ] {
+        let o = radlab(tmp.path(), &args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let t = text(&o);
+        assert!(t.contains(want), "{args:?}: {t}");
+        assert!(!t.contains("panicked"), "{t}");
+    }
+    // Against another file's reference the differing one is accepted.
+    let o = radlab(
+        tmp.path(),
+        &[
+            "compare",
+            &p("a.points.csv"),
+            &other,
+            "--reference",
+            &p("b.points.csv"),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+}

@@ -1,6 +1,7 @@
 //! The subcommands of `radlab`.
 
 pub mod catalogue;
+pub mod compare;
 pub mod probe;
 pub mod render;
 pub mod solve;
