@@ -200,7 +200,8 @@ impl MethodParams for FaceClusterSolveParams {
              answers) | gathered (each face's and patch leaf's value gathered first over the tree at its \
              centroid from the solution's answers, at values_opening: a second bounce, so the solution's \
              error reaches a point only through one more reflection and the values' direct light is exact up \
-             to visibility rays, for k more gathers a solution, charged to answering)",
+             to visibility rays, kernel-weighted toward a whole emitter, for k more gathers a solution, \
+             charged to answering)",
         ));
         d.push((
             "values_opening",

@@ -122,6 +122,61 @@ impl GatherSettings {
         emits: bool,
         rays: &mut u64,
     ) -> f64 {
+        self.share(accel, face, point, None, key, stream, src, emits, rays)
+    }
+
+    /// As [`GatherSettings::visible_share`], but each jittered ray weighted by the point kernel it stands for,
+    ///
+    ///   V_xj = Σ_k w_k V_k / Σ_k w_k,   w_k = max(0, n·(y_k − x)) max(0, n_j·(x − y_k)) / |y_k − x|⁴,
+    ///
+    /// so that F_xj V_xj estimates ∫_j V k dA, the light that gets through, and not F_xj times the share of
+    /// the source's area that is seen. The two differ where what is hidden is where the kernel is small or
+    /// large: a large light seen past a ridge from far away has its far side, nearer the horizon and fainter,
+    /// hidden first, and the area share then undercounts what arrives. `normal` is the query point's. The
+    /// same rays as [`GatherSettings::visible_share`] (one ray or none: the same share); if no sample has
+    /// weight, the area share. Each weight is a point-kernel evaluation, added to `kernels`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn kernel_weighted_share(
+        &self,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        normal: DVec3,
+        key: u64,
+        stream: u64,
+        src: &ElementValue,
+        emits: bool,
+        rays: &mut u64,
+        kernels: &mut u64,
+    ) -> f64 {
+        self.share(
+            accel,
+            face,
+            point,
+            Some((normal, kernels)),
+            key,
+            stream,
+            src,
+            emits,
+            rays,
+        )
+    }
+
+    /// [`GatherSettings::visible_share`], kernel-weighted when the query's normal (and a count of kernel
+    /// evaluations) is given.
+    #[allow(clippy::too_many_arguments)]
+    fn share(
+        &self,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        weighting: Option<(DVec3, &mut u64)>,
+        key: u64,
+        stream: u64,
+        src: &ElementValue,
+        emits: bool,
+        rays: &mut u64,
+    ) -> f64 {
         let how = if emits || src.open < 1.0 {
             self.direct
         } else {
@@ -155,9 +210,29 @@ impl GatherSettings {
                 }
                 let mut visible = [false; 64];
                 accel.visible_many(&segments[..total], &mut visible[..total]);
-                let seen = visible[..total].iter().filter(|&&v| v).count();
                 *rays += total as u64;
-                seen as f64 / total as f64
+                let area_share =
+                    || visible[..total].iter().filter(|&&v| v).count() as f64 / total as f64;
+                let Some((n, kernels)) = weighting else {
+                    return area_share();
+                };
+                *kernels += total as u64;
+                let nj = src.polygon.normal();
+                let (mut seen, mut all) = (0.0, 0.0);
+                for (s, &v) in segments[..total].iter().zip(&visible[..total]) {
+                    let d = s.q - point;
+                    let d2 = d.length_squared();
+                    let w = n.dot(d).max(0.0) * (-nj.dot(d)).max(0.0) / (d2 * d2);
+                    all += w;
+                    if v {
+                        seen += w;
+                    }
+                }
+                if all > 0.0 && all.is_finite() {
+                    seen / all
+                } else {
+                    area_share()
+                }
             }
         }
     }
@@ -596,6 +671,122 @@ mod tests {
                 (b - Rgb::splat(want)).abs().max_element() < 1e-12 * want.max(1.0),
                 "({x}, {y}): {b} vs {want}"
             );
+        }
+    }
+
+    /// A light half hidden from a point, its far half, where the kernel is small: the kernel-weighted share
+    /// estimates the factor of the part that is seen over the whole light's (exact: the point-to-polygon factor
+    /// of the visible part, Hottel's contour integral), where the share of the area seen (one half) does not.
+    #[test]
+    fn kernel_weighted_share_estimates_the_factor_of_what_is_seen() {
+        use crate::SceneBuilder;
+        use crate::test_scenes::material;
+        // Receiver at the origin facing +z; light at z = 1 over x ∈ [0.5, 4.5], |y| ≤ 1, facing down; a plate
+        // at z = 0.5 over x ≥ 1.25 hides from the origin every point of the light with x ≥ 2.5.
+        let build = |blocked: bool| {
+            let mut b = SceneBuilder::new("half-hidden light");
+            let (ground, light) = (
+                material(&mut b, "ground", 0.5, 0.0),
+                material(&mut b, "light", 0.0, 1.0),
+            );
+            b.add_polygon_points(
+                &[
+                    dvec3(-0.1, -0.1, 0.0),
+                    dvec3(0.1, -0.1, 0.0),
+                    dvec3(0.1, 0.1, 0.0),
+                    dvec3(-0.1, 0.1, 0.0),
+                ],
+                ground,
+                "receiver",
+            )
+            .expect("receiver");
+            b.add_polygon_points(
+                &[
+                    dvec3(0.5, -1.0, 1.0),
+                    dvec3(0.5, 1.0, 1.0),
+                    dvec3(4.5, 1.0, 1.0),
+                    dvec3(4.5, -1.0, 1.0),
+                ],
+                light,
+                "light",
+            )
+            .expect("light");
+            if blocked {
+                b.add_polygon_points(
+                    &[
+                        dvec3(1.25, -3.0, 0.5),
+                        dvec3(6.0, -3.0, 0.5),
+                        dvec3(6.0, 3.0, 0.5),
+                        dvec3(1.25, 3.0, 0.5),
+                    ],
+                    ground,
+                    "blocker",
+                )
+                .expect("blocker");
+            }
+            b.build().expect("scene")
+        };
+        let (x, n) = (DVec3::ZERO, DVec3::Z);
+        let whole = Polygon::quad(
+            dvec3(0.5, -1.0, 1.0),
+            dvec3(0.5, 1.0, 1.0),
+            dvec3(4.5, 1.0, 1.0),
+            dvec3(4.5, -1.0, 1.0),
+        );
+        let seen = Polygon::quad(
+            dvec3(0.5, -1.0, 1.0),
+            dvec3(0.5, 1.0, 1.0),
+            dvec3(2.5, 1.0, 1.0),
+            dvec3(2.5, -1.0, 1.0),
+        );
+        let exact = point_polygon(x, n, &seen) / point_polygon(x, n, &whole);
+        assert!(
+            exact > 0.75,
+            "the near half carries most of the light: {exact}"
+        );
+        let settings = GatherSettings::with_seed(3);
+        for blocked in [false, true] {
+            let scene = build(blocked);
+            let accel = Accel::new(&scene);
+            let light = (0..scene.faces.len())
+                .find(|&f| scene.material(f).is_emitter())
+                .expect("light");
+            assert!((scene.faces[light].normal - -DVec3::Z).length() < 1e-12);
+            let src = ElementValue {
+                face: light,
+                polygon: scene.polygon(light),
+                radiosity: Rgb::ONE,
+                open: 1.0,
+            };
+            let (mut weighted, mut area, mut rays, mut kernels) = (0.0, 0.0, 0u64, 0u64);
+            let queries = 400;
+            for key in 0..queries {
+                weighted += settings.kernel_weighted_share(
+                    &accel,
+                    0,
+                    x,
+                    n,
+                    key,
+                    9,
+                    &src,
+                    true,
+                    &mut rays,
+                    &mut kernels,
+                );
+                area += settings.visible_share(&accel, 0, x, key, 9, &src, true, &mut rays);
+            }
+            let (weighted, area) = (weighted / queries as f64, area / queries as f64);
+            assert_eq!(rays, 2 * queries * DEFAULT_DIRECT_VISIBILITY.rays() as u64);
+            assert_eq!(kernels, queries * DEFAULT_DIRECT_VISIBILITY.rays() as u64);
+            if blocked {
+                assert!(
+                    (weighted - exact).abs() < 0.01,
+                    "weighted {weighted} against {exact}"
+                );
+                assert!((area - 0.5).abs() < 0.01, "area share {area}");
+            } else {
+                assert_eq!((weighted, area), (1.0, 1.0));
+            }
         }
     }
 
