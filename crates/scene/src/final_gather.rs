@@ -676,7 +676,7 @@ mod tests {
 
     /// A light half hidden from a point, its far half, where the kernel is small: the kernel-weighted share
     /// estimates the factor of the part that is seen over the whole light's (exact: the point-to-polygon factor
-    /// of the visible part, Hottel's contour integral), where the share of the area seen (one half) does not.
+    /// of the visible part, Lambert's contour integral), where the share of the area seen (one half) does not.
     #[test]
     fn kernel_weighted_share_estimates_the_factor_of_what_is_seen() {
         use crate::SceneBuilder;

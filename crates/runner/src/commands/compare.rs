@@ -17,6 +17,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use radlab_scene::{Rgb, error_metric, sampling};
 
+use crate::experiment::execute::PointRow;
+
 /// Options of `radlab compare`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct CompareArgs {
@@ -49,36 +51,18 @@ pub struct PointAnswer {
     pub value: Rgb,
 }
 
-/// The columns of a points file this command reads (others are ignored).
-#[derive(serde::Deserialize)]
-struct Row {
-    face: usize,
-    x: f64,
-    y: f64,
-    z: f64,
-    ref_r: f64,
-    ref_g: f64,
-    ref_b: f64,
-    se_r: f64,
-    se_g: f64,
-    se_b: f64,
-    r: f64,
-    g: f64,
-    b: f64,
-}
-
 /// Reads a points file. Errors name the file and the data row (1-based, header excluded).
 pub fn read_points(path: &Path) -> Result<Vec<PointAnswer>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let mut rdr = csv::Reader::from_reader(text.as_bytes());
     let mut out = Vec::new();
-    for (i, rec) in rdr.deserialize::<Row>().enumerate() {
+    for (i, rec) in rdr.deserialize::<PointRow>().enumerate() {
         let row = i + 1;
         let r = rec.with_context(|| {
             format!(
                 "{}: row {row}: not a points file row (a run's runs/<id>.points.csv has columns \
-                 point,face,x,y,z,ref_r,ref_g,ref_b,se_r,se_g,se_b,r,g,b,…)",
+                 point,face,x,y,z,ref_r,ref_g,ref_b,se_r,se_g,se_b,r,g,b,rel_error,z_score)",
                 path.display()
             )
         })?;

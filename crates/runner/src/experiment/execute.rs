@@ -204,26 +204,27 @@ pub fn points_path(dir: &Path, id: &str) -> PathBuf {
 
 /// One evaluation point of a run's final answer: where it is, the reference with its standard error, the
 /// method's value and the point's error as the max column measures it.
-#[derive(serde::Serialize)]
-struct PointRow {
-    point: usize,
-    face: usize,
-    x: f64,
-    y: f64,
-    z: f64,
-    ref_r: f64,
-    ref_g: f64,
-    ref_b: f64,
-    se_r: f64,
-    se_g: f64,
-    se_b: f64,
-    r: f64,
-    g: f64,
-    b: f64,
+/// `radlab compare` reads these rows back.
+#[derive(serde::Serialize, serde::Deserialize)]
+pub(crate) struct PointRow {
+    pub(crate) point: usize,
+    pub(crate) face: usize,
+    pub(crate) x: f64,
+    pub(crate) y: f64,
+    pub(crate) z: f64,
+    pub(crate) ref_r: f64,
+    pub(crate) ref_g: f64,
+    pub(crate) ref_b: f64,
+    pub(crate) se_r: f64,
+    pub(crate) se_g: f64,
+    pub(crate) se_b: f64,
+    pub(crate) r: f64,
+    pub(crate) g: f64,
+    pub(crate) b: f64,
     /// max over channels of |B − R| / max(|R|, floor), the max column's per-point term.
-    rel_error: f64,
+    pub(crate) rel_error: f64,
     /// max over channels of |B − R| / s (the reference's standard error; infinite where s = 0 and B ≠ R).
-    z_score: f64,
+    pub(crate) z_score: f64,
 }
 
 /// Path of a run's image.
