@@ -234,9 +234,10 @@ pub fn assemble(
     runs: &[(String, Vec<PointAnswer>)],
     reference: Option<(&str, &[PointAnswer])>,
 ) -> Result<Comparison> {
-    let (ref_name, refs) = match reference {
-        Some((name, points)) => (name, points),
-        None => (runs[0].0.as_str(), runs[0].1.as_slice()),
+    let (ref_name, refs) = match (reference, runs.first()) {
+        (Some((name, points)), _) => (name, points),
+        (None, Some((name, points))) => (name.as_str(), points.as_slice()),
+        (None, None) => bail!("no runs to compare: give two or more runs' points files"),
     };
     for (name, points) in runs {
         if points.len() != refs.len() {
