@@ -38,24 +38,32 @@ pub trait TransferMode: Sync + Send + Debug + Default {
     type Coefficient: Copy + Send + Sync + Debug;
     /// Where the link from `src` to cluster `recv` is evaluated: by default at `recv` if it resolves the link
     /// ([`TransferMode::resolves`]), else below it where clusters do, or at the faces.
-    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>) -> GatherAt {
-        if Self::resolves(recv, src) {
+    fn gather_at_cluster(recv: &ClusterNode<'_>, src: &ClusterNode<'_>, flat: f64) -> GatherAt {
+        if Self::resolves(recv, src, flat) {
             GatherAt::Receiver
         } else {
             GatherAt::Descend
         }
     }
     /// Whether cluster `target` (a link's receiver or a cluster below it) takes the link from `src` as a
-    /// whole (by default never: links reach the faces).
-    fn resolves(target: &ClusterNode<'_>, src: &ClusterNode<'_>) -> bool {
-        let _ = (target, src);
+    /// whole (by default never: links reach the faces). `flat` is the widest normal cone (half-angle, radians)
+    /// that takes a link straddling its faces as a whole ([`crate::VolumeClusterParams::straddle_angle`]).
+    fn resolves(target: &ClusterNode<'_>, src: &ClusterNode<'_>, flat: f64) -> bool {
+        let _ = (target, src, flat);
         false
     }
     /// A scalar coefficient (irradiance per unit flux) at a patch target.
     fn scalar(c: f64) -> Self::Coefficient;
-    /// The coefficient at cluster `target` (the link's receiver or a cluster below it): `g` = V/(π r²),
-    /// direction `d` from the source's centroid to the target's, centroid distance `r`.
-    fn at_cluster(target: &ClusterNode<'_>, g: f64, d: DVec3, r: f64) -> Self::Coefficient;
+    /// The coefficient at cluster `target` (the link's receiver or a cluster below it, one that resolves the
+    /// link under the same `flat`): `g` = V/(π r²), direction `d` from the source's centroid to the target's,
+    /// centroid distance `r`.
+    fn at_cluster(
+        target: &ClusterNode<'_>,
+        g: f64,
+        d: DVec3,
+        r: f64,
+        flat: f64,
+    ) -> Self::Coefficient;
     /// J_S(d) of cluster `src`.
     fn cluster_flux(
         view: &NodeView<'_, ClusterNode<'_>>,
@@ -101,7 +109,7 @@ impl<S: ScalarTransfer> TransferMode for S {
     type Exitance = ();
     type Coefficient = f64;
 
-    fn gather_at_cluster(_recv: &ClusterNode<'_>, _src: &ClusterNode<'_>) -> GatherAt {
+    fn gather_at_cluster(_recv: &ClusterNode<'_>, _src: &ClusterNode<'_>, _flat: f64) -> GatherAt {
         <S as ScalarTransfer>::AT_CLUSTER
     }
 
@@ -109,7 +117,7 @@ impl<S: ScalarTransfer> TransferMode for S {
         c
     }
 
-    fn at_cluster(_target: &ClusterNode<'_>, g: f64, d: DVec3, _r: f64) -> f64 {
+    fn at_cluster(_target: &ClusterNode<'_>, g: f64, d: DVec3, _r: f64, _flat: f64) -> f64 {
         <S as ScalarTransfer>::at_cluster(g, d)
     }
 
@@ -155,6 +163,9 @@ pub struct ClusterTransport<'a, M> {
     reachable: Vec<bool>,
     /// Gauss points per side of the receiver rule over a patch (radlab-scene's `receiver_points`).
     quadrature: u32,
+    /// The widest normal cone (half-angle, radians) that takes a link straddling its faces as a whole; 0 by
+    /// default ([`ClusterTransport::with_straddle_cone`]).
+    straddle_cone: f64,
 }
 
 impl<'a, M: TransferMode> ClusterTransport<'a, M> {
@@ -175,7 +186,16 @@ impl<'a, M: TransferMode> ClusterTransport<'a, M> {
             mode: M::default(),
             reachable: Vec::new(),
             quadrature,
+            straddle_cone: 0.0,
         }
+    }
+
+    /// The same transport, letting a cluster whose normal cone is at most `half_angle` radians wide take a
+    /// link that straddles its faces as a whole, by their mean clamped cosine, where an oriented receiver
+    /// would otherwise hand it down to the faces along the line where they turn away from the source.
+    pub fn with_straddle_cone(mut self, half_angle: f64) -> Self {
+        self.straddle_cone = half_angle;
+        self
     }
 
     /// The same transport, giving no irradiance to faces whose entry in `reachable` (by face id) is false:
@@ -230,13 +250,13 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
     fn gather_at(&self, recv: &ClusterNode<'a>, src: &ClusterNode<'a>) -> GatherAt {
         match (recv, src) {
             (ClusterNode::Patch(_), ClusterNode::Patch(_)) => self.patches.patch_gather_at(),
-            (ClusterNode::Cluster(_), _) => M::gather_at_cluster(recv, src),
+            (ClusterNode::Cluster(_), _) => M::gather_at_cluster(recv, src, self.straddle_cone),
             (ClusterNode::Patch(_), ClusterNode::Cluster(_)) => GatherAt::Receiver,
         }
     }
 
     fn resolves(&self, target: &ClusterNode<'a>, src: &ClusterNode<'a>, _link: &Link) -> bool {
-        matches!(target, ClusterNode::Cluster(_)) && M::resolves(target, src)
+        matches!(target, ClusterNode::Cluster(_)) && M::resolves(target, src, self.straddle_cone)
     }
 
     fn coefficient(
@@ -262,7 +282,7 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
                 } else {
                     0.0
                 };
-                M::at_cluster(target, g, d, r2.sqrt())
+                M::at_cluster(target, g, d, r2.sqrt(), self.straddle_cone)
             }
             ClusterNode::Patch(p) => {
                 // The point approximation averaged over the patch's Gauss points (the rule its patch links

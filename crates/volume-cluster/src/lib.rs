@@ -15,6 +15,7 @@
 //! |---|---|---|
 //! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (normal cones; exact sums where a source straddles), `directional` (normal cones; spherical harmonics where a source straddles) |
 //! | `row_normalisation` | `off` | `closed-scenes`: in a closed scene, rescale each leaf's row of the operator to sum to one |
+//! | `straddle_angle` | `5` | the widest normal cone (half-angle, degrees) at which a cluster that a link straddles takes it whole by its faces' mean clamped cosine (α, directional); 0 hands every straddled link down to the faces |
 //! | every parameter of `hierarchical` but `lazy_linking` | as there | ε, oracle, schedule, α, stages, minimum element, visibility rays per link (also for cluster links), quadrature, tolerance, gather (patch links), interpolation, memory budget |
 //!
 //! ## Transfers, side by side
@@ -31,7 +32,8 @@
 //!   the source gathers the link's irradiance field (value and gradient at its centroid, pushed to its
 //!   faces), links behind every face carry nothing, and a link that straddles its faces descends to the
 //!   sub-clusters it does not straddle, reaching faces one by one only along the line where the surface
-//!   turns away ([`normal_cone`]). O(1) per link but for straddling receivers.
+//!   turns away ([`normal_cone`]), or stopping at straddled clusters no wider than `straddle_angle`, whose
+//!   faces all take their mean clamped cosine. O(1) per link but for straddling receivers.
 //!
 //! ## Cost
 //! Measured side by side (release, `radlab solve "builtin:concentric-spheres?faces=K" --method volume-cluster
@@ -64,6 +66,15 @@
 //!   1,401 → 1,160 s at 1e5; links, evaluations, rays and radiosities unchanged. Fitted slope over 1e3–1e5 of
 //!   the new series 1.112, 1.17–1.22 from 3e4 to 1e5 (old: 1.35 that day): above its target (≤ 1.05), the
 //!   rest being rays whose cost grows with the BVH.
+//! - Straddled clusters no wider than `straddle_angle` = 5° take a link whole instead of handing it down to
+//!   the faces (same command, directional, idle machine, two solves at a time, one per core, 2026-12-04):
+//!   at 1e5 faces 711.4 → 658.6 s, kernel evaluations 117.6 → 75.3 M (isotropic's: 62.5 M), memory held
+//!   7.49 → 5.78 GiB (isotropic 3.80), the furnace's area-mean |B − 2|/2 0.128 → 0.129%; at 3e4 158.7 →
+//!   152.5 s, 26.2 → 21.2 M evaluations. `straddle_angle = 0` reproduces the former faces.csv byte for byte
+//!   (1e3 … 3e4). At 10°: 639.5 s, 67.0 M, 0.164%. The same day isotropic took 4.31 / 9.72 / 35.95 / 132.8 /
+//!   555.7 s at 1e3 … 1e5 (fitted slope 1.065, 1.18 from 3e4 to 1e5) and directional 4.29 / 10.21 / 38.98 /
+//!   152.5 / 658.6 s (1.103, 1.21 from 3e4 to 1e5; before: 1.105 and 1.31; its three smaller solves ran
+//!   alone, the rest two at a time): rays, 760 M at 1e5 for either transfer, set the slope of both.
 //!
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`

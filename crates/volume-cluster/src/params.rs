@@ -51,6 +51,15 @@ pub struct VolumeClusterParams {
     pub transfer: Transfer,
     /// Row normalisation. Default [`RowNormalisation::Off`].
     pub row_normalisation: RowNormalisation,
+    /// The widest normal cone, as a half-angle in degrees, at which a receiving cluster that a link straddles
+    /// (some of its faces turned toward the source, some away) takes the link as a whole under the α and
+    /// directional transfers: every face below it receives the faces' mean clamped cosine
+    /// ([`crate::normal_cone::NormalCone::mean_clamped_cosine`], within sin(2θ)/2 of a face square to the
+    /// link). Wider straddled clusters hand the link to their children, down to the faces where the surface
+    /// turns away from the source: on a smooth surface about √m of a cluster's m faces, a cost per link that
+    /// grows with the number of faces. 0 takes every straddled link down to the faces. Default
+    /// [`DEFAULT_STRADDLE_ANGLE`].
+    pub straddle_angle: f64,
     /// The hierarchical engine's parameters (ε, oracle, schedule, visibility, gather, interpolation, …).
     #[serde(flatten)]
     pub engine: HierarchicalParams,
@@ -64,6 +73,7 @@ impl Default for VolumeClusterParams {
         Self {
             transfer: Transfer::default(),
             row_normalisation: RowNormalisation::default(),
+            straddle_angle: DEFAULT_STRADDLE_ANGLE,
             engine: HierarchicalParams {
                 error_norm: ErrorNorm::Power,
                 epsilon: DEFAULT_EPSILON,
@@ -75,6 +85,9 @@ impl Default for VolumeClusterParams {
 
 /// Default ε (power norm): a link may carry up to this fraction of the scene's power.
 pub const DEFAULT_EPSILON: f64 = 1e-4;
+
+/// Default [`VolumeClusterParams::straddle_angle`], in degrees.
+pub const DEFAULT_STRADDLE_ANGLE: f64 = 5.0;
 
 impl MethodParams for VolumeClusterParams {
     fn docs() -> Vec<(&'static str, &'static str)> {
@@ -89,6 +102,12 @@ impl MethodParams for VolumeClusterParams {
             "off (default: the rows are what the transfer computes) | closed-scenes (where every enclosure ray \
              hits the front of a face, each leaf's row is rescaled to sum to one, as an enclosure's form factors \
              do; a closed furnace then holds by construction)",
+        ));
+        d.push((
+            "straddle_angle",
+            "the widest normal cone (half-angle, degrees, in [0, 90)) at which a cluster straddled by a link takes \
+             it whole, every face receiving the faces' mean clamped cosine, under alpha and directional (default \
+             5; 0 hands every straddled link down to the faces, at a cost per link growing with the face count)",
         ));
         d.extend(
             HierarchicalParams::docs()
@@ -112,6 +131,16 @@ impl MethodParams for VolumeClusterParams {
     }
 
     fn validate(&self) -> Result<(), SolveError> {
+        if !(self.straddle_angle >= 0.0 && self.straddle_angle < 90.0) {
+            return Err(SolveError::param(
+                "straddle_angle",
+                format!(
+                    "{} is not a half-angle in degrees in [0, 90); use e.g. {DEFAULT_STRADDLE_ANGLE} \
+                     (the default), or 0 to take straddled links down to the faces",
+                    self.straddle_angle
+                ),
+            ));
+        }
         self.engine.validate()
     }
 
@@ -123,6 +152,10 @@ impl MethodParams for VolumeClusterParams {
         let mut v = vec![
             ("transfer".to_string(), transfer),
             ("row_normalisation".to_string(), rows),
+            (
+                "straddle_angle".to_string(),
+                toml::Value::Float(DEFAULT_STRADDLE_ANGLE).to_string(),
+            ),
         ];
         // This method's own engine defaults (ε and the error norm differ from hierarchical's).
         if let Ok(toml::Value::Table(t)) = toml::Value::try_from(Self::default().engine) {
@@ -145,6 +178,18 @@ impl MethodParams for VolumeClusterParams {
         )?;
         let row_normalisation =
             own_key(&mut table, "row_normalisation", "use closed-scenes or off")?;
+        let straddle_angle = match table.remove("straddle_angle") {
+            None => DEFAULT_STRADDLE_ANGLE,
+            Some(v) => v
+                .as_float()
+                .or_else(|| v.as_integer().map(|i| i as f64))
+                .ok_or_else(|| {
+                    SolveError::param(
+                        "straddle_angle",
+                        format!("{v} is not a number; use an angle in degrees such as 5"),
+                    )
+                })?,
+        };
         if table.remove("lazy_linking").is_some() {
             return Err(SolveError::param(
                 "lazy_linking",
@@ -157,11 +202,14 @@ impl MethodParams for VolumeClusterParams {
             .map_err(|e| SolveError::param("parameters", e.to_string()))?;
         full.extend(table);
         let engine = HierarchicalParams::from_table(full)?;
-        Ok(Self {
+        let p = Self {
             transfer,
             row_normalisation,
+            straddle_angle,
             engine,
-        })
+        };
+        p.validate()?;
+        Ok(p)
     }
 }
 
@@ -192,7 +240,15 @@ mod tests {
         .expect("valid");
         assert_eq!(p.transfer, Transfer::Isotropic);
         assert_eq!(p.engine.epsilon, 0.05);
-        for (k, v) in [("transfer", "sideways"), ("epsilon", "-1"), ("nope", "1")] {
+        for (k, v) in [
+            ("transfer", "sideways"),
+            ("epsilon", "-1"),
+            ("nope", "1"),
+            ("straddle_angle", "90"),
+            ("straddle_angle", "-1"),
+            ("straddle_angle", "nan"),
+            ("straddle_angle", "\"wide\""),
+        ] {
             let e = VolumeClusterParams::from_pairs(&[(k.into(), v.into())])
                 .expect_err("rejected")
                 .to_string();

@@ -71,7 +71,8 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         let before = accel.rays_cast();
         let enclosures = crate::enclosure::enclosures(scene, accel, seed);
         let transport = ClusterTransport::new(patches, accel, p.visibility, p.quadrature, seed)
-            .with_reachable(enclosures.reachable);
+            .with_reachable(enclosures.reachable)
+            .with_straddle_cone(params.straddle_angle.to_radians());
         let output = SurfaceOutput::new(p.reconstruction, seed);
         let n_roots = roots.len() as u32;
         let mut engine = Engine::new(roots, transport, p, min_size)?;

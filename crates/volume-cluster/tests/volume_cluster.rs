@@ -488,3 +488,49 @@ fn cornell_box_approaches_hierarchical_radiosity_as_epsilon_falls() {
     assert!(errors[0] > errors[1] && errors[0] > errors[2], "{errors:?}");
     assert!(errors[1] < 0.01 && errors[2] < 0.01, "{errors:?}");
 }
+
+#[test]
+fn straddled_clusters_taken_whole_keep_the_furnace_at_fewer_kernel_evaluations() {
+    // Under α and directional a link that straddles a receiving cluster's faces is handed down to the faces
+    // along the line where the sphere turns away from the source; with `straddle_angle` θ a straddled cluster
+    // whose normal cone is at most θ wide takes it whole, every face receiving the faces' mean clamped cosine
+    // (within sin(2θ)/2 of a face square to the link). On the concentric spheres, where B = E/(1 − ρ)
+    // everywhere (Christensen 1995 §8.3), the furnace holds as well either way, each face moves by little, and
+    // taking straddled links whole spends fewer kernel evaluations.
+    let scene = builtin("concentric-spheres?faces=1000&reflectance=0.5").expect("scene");
+    let accel = Accel::new(&scene);
+    for t in [Transfer::Alpha, Transfer::Directional] {
+        let run = |angle: f64| {
+            let mut p = params(t, 1e-4);
+            p.straddle_angle = angle;
+            let mut s = VolumeClusterSolver::new(&scene, &accel, p, 1).expect("solver");
+            solve(&mut s);
+            (s.face_radiosity(), s.stats())
+        };
+        let (exact, st0) = run(0.0);
+        let (whole, st1) = run(30.0);
+        let furnace = |faces: &[(usize, f64, Rgb)]| {
+            let area: f64 = faces.iter().map(|f| f.1).sum();
+            faces.iter().map(|f| f.1 * f.2.x).sum::<f64>() / area * 0.5 - 1.0
+        };
+        let moved = exact
+            .iter()
+            .zip(&whole)
+            .map(|(a, b)| (b.2.x / a.2.x - 1.0).abs())
+            .fold(0.0, f64::max);
+        // Measured: 3.05 M → 2.95 M kernel evaluations (at 1,000 faces few clusters are flat enough; the
+        // saving grows with the mesh), furnace (α / directional) +0.04 / +0.06% → +0.01 / +0.03%, faces
+        // within 1.44%.
+        assert!(
+            st1.form_factors < st0.form_factors,
+            "{t:?}: {} kernel evaluations taking straddled links whole, {} handing them down",
+            st1.form_factors,
+            st0.form_factors
+        );
+        assert!(moved < 0.03, "{t:?}: a face moved by {moved}");
+        for (name, faces) in [("handed down", &exact), ("whole", &whole)] {
+            let err = furnace(faces);
+            assert!(err.abs() < 0.01, "{t:?}, {name}: furnace {err}");
+        }
+    }
+}
