@@ -76,7 +76,11 @@
 //!   152.5 / 658.6 s (1.103, 1.21 from 3e4 to 1e5; before: 1.105 and 1.31; its three smaller solves ran
 //!   alone, the rest two at a time): rays, 760 M at 1e5 for either transfer, set the slope of both.
 //!
-//! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Links: one root
+//! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Materialising it in the
+//! engine checked the memory budget by walking every node at each split, O(k²): 74% of a 9.15 s set-up at 1e5
+//! faces, and more than 300 s at 1e6 (killed there); counted on instead, 2.10 s and 38.0 s (`radlab --threads 1
+//! solve "builtin:concentric-spheres?faces=K" --method volume-cluster --max-steps 0`, 2026-12-04), most of it
+//! the enclosure rays, 16 per face. Links: one root
 //! self-link, refined to a number that depends on ε and the lighting rather than on k². Visibility: `visibility`
 //! rays per link between points on the two ends' faces.
 //!

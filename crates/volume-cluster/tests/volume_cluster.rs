@@ -534,3 +534,19 @@ fn straddled_clusters_taken_whole_keep_the_furnace_at_fewer_kernel_evaluations()
         }
     }
 }
+
+#[test]
+fn a_memory_budget_too_small_for_the_cluster_hierarchy_is_refused_with_the_key_to_raise() {
+    // The hierarchy down to the faces is built before any link, and alone holds more than 0.1 MiB here.
+    let scene = builtin("concentric-spheres?faces=1000").expect("scene");
+    let accel = Accel::new(&scene);
+    let mut p = params(Transfer::Alpha, 1e-4);
+    p.engine.memory_budget_mib = 0.1;
+    let e = VolumeClusterSolver::new(&scene, &accel, p.clone(), 1)
+        .expect_err("over budget")
+        .to_string();
+    assert!(e.contains("memory_budget_mib"), "{e}");
+    p.engine.memory_budget_mib = 16.0;
+    let s = VolumeClusterSolver::new(&scene, &accel, p, 1).expect("within budget");
+    assert!(s.stats().bytes > (0.1 * 1024.0 * 1024.0) as u64);
+}
