@@ -12,6 +12,7 @@ use radlab_scene::{
     Accel, Material, Reconstruction, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin,
     sampling,
 };
+use radlab_volume_cluster::normal_cone::{NormalCone, Side};
 use radlab_volume_cluster::{
     Alpha, ClusterNode, ClusterSolver, ClusterTree, Directional, Isotropic, RowNormalisation,
     Transfer, TransferMode, VolumeClusterParams, VolumeClusterSolver,
@@ -549,4 +550,62 @@ fn a_memory_budget_too_small_for_the_cluster_hierarchy_is_refused_with_the_key_t
     p.engine.memory_budget_mib = 16.0;
     let s = VolumeClusterSolver::new(&scene, &accel, p, 1).expect("within budget");
     assert!(s.stats().bytes > (0.1 * 1024.0 * 1024.0) as u64);
+}
+
+/// The normals of a tessellated cap: the points of a 200,000-point Fibonacci lattice on the unit sphere within
+/// `theta` of `axis`, each with area weight 1 + (i mod 3) so the area mean differs from the plain mean.
+fn cap(axis: DVec3, theta: f64) -> Vec<(f64, DVec3)> {
+    fibonacci(200_000)
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| (1.0 + (i % 3) as f64, v))
+        .filter(|(_, v)| axis.dot(*v).clamp(-1.0, 1.0).acos() <= theta)
+        .collect()
+}
+
+#[test]
+fn mean_clamped_cosine_is_within_its_bound_of_the_faces() {
+    // The faces' exact area-mean clamped cosine (1/A) Σ A_i max(0, n_i·u) against the cone's estimate,
+    // over directions u sweeping from facing the cap whole, through straddling it, to behind it.
+    let axis = dvec3(0.3, -0.2, 1.0).normalize();
+    let side = axis.any_orthonormal_vector();
+    for theta in [0.02f64, 0.09, 0.3] {
+        let faces = cap(axis, theta);
+        let cone = NormalCone::of(faces.iter().copied());
+        assert!((cone.half_angle - theta).abs() < 0.01 * theta + 0.005);
+        let area: f64 = faces.iter().map(|f| f.0).sum();
+        let bound = (2.0 * cone.half_angle).sin() / 2.0;
+        let (mut worst, mut straddled) = (0.0f64, 0);
+        for k in 0..=200 {
+            let phi = std::f64::consts::FRAC_PI_2 + (k as f64 / 100.0 - 1.0) * 2.0 * theta;
+            let u = (phi.cos() * axis + phi.sin() * side).normalize();
+            let exact = faces
+                .iter()
+                .map(|(a, n)| a * n.dot(u).max(0.0))
+                .sum::<f64>()
+                / area;
+            let estimate = cone.mean_clamped_cosine(u);
+            let err = (estimate - exact).abs();
+            match cone.side(u) {
+                Side::Front | Side::Back => {
+                    assert!(err < 1e-12, "θ {theta}, φ {phi}: {estimate} vs {exact}")
+                }
+                Side::Straddle => {
+                    straddled += 1;
+                    worst = worst.max(err);
+                    assert!(err <= bound, "θ {theta}, φ {phi}: {estimate} vs {exact}");
+                }
+            }
+        }
+        assert!(
+            straddled > 50,
+            "θ {theta}: {straddled} straddling directions"
+        );
+        // The bound is the worst any spread of cosines could do; on a cap the estimate is far inside it
+        // (measured 0.036–0.041 of it at these three widths).
+        assert!(
+            worst < bound / 20.0,
+            "θ {theta}: worst {worst} of bound {bound}"
+        );
+    }
 }
