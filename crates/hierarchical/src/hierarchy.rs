@@ -444,7 +444,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     pub fn expand(&mut self, split: impl Fn(&N) -> bool) -> Result<(), SolveError> {
         // No link, row or source row exists yet, so what the nodes hold grows by one node's arrays per node
         // made (and the face index by the faces reached): measured once here and counted on, the check costs
-        // O(1) a split. Measuring at every split walked every node each time, O(k²) in all: 74% of a 9.4 s
+        // O(1) a split. Measuring at every split walked every node each time, O(k²) in all: 74% of a 9.2 s
         // set-up at 1e5 faces.
         let (start, held) = (self.nodes.len(), self.bytes());
         let face_index = self.face_nodes.capacity();

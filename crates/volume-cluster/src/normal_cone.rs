@@ -29,9 +29,10 @@
 //! evaluations, so on a finer mesh the same links cost more. A straddled cluster whose cone is at most a set
 //! half-angle θ wide (`straddle_angle`) therefore takes the link whole: every face below it receives
 //! V J c̄/(π r²), c̄ the faces' mean clamped cosine toward the source, estimated from the cone and the faces'
-//! mean normal ([`NormalCone::mean_clamped_cosine`]; within sin(2θ)/2 of a face square to the link, and within
-//! a twentieth of that on the tessellated caps of the crate's tests). The descent then stops at clusters of a
-//! given angular size, whose number along the line where the surface turns away does not grow with the mesh.
+//! mean normal ([`NormalCone::mean_clamped_cosine`]; within sin(2θ)/2 of a face square to the link for
+//! θ ≤ 45°, and within a twentieth of that on the tessellated caps of the crate's tests). The descent then
+//! stops at clusters of a given angular size, whose number along the line where the surface turns away does
+//! not grow with the mesh.
 
 use std::f64::consts::FRAC_PI_2;
 
@@ -116,9 +117,10 @@ impl NormalCone {
     /// the widest range about m within the range the cone allows, [cos(φ + θ), cos(φ − θ)] (φ the angle
     /// between the axis and u): over [l, h] ∋ 0 the mean of max(0, x) is h²/(2(h − l)). The truth and this
     /// estimate both lie between Jensen's max(0, m) and the two-point spread h_c (m − l_c)/(h_c − l_c) over
-    /// the cone's range [l_c, h_c], so the error is at most that gap: sin(2θ)/2 at worst where u straddles
-    /// the cone (|φ − π/2| < θ), relative to a face square to u. Exact where the cone faces u whole (m) or
-    /// turns from it whole (0).
+    /// the cone's range [l_c, h_c], so the error is at most that gap, whose largest value (at m = 0) is
+    /// h_c |l_c|/(h_c + |l_c|), relative to a face square to u: where u straddles the cone (|φ − π/2| < θ)
+    /// both ends are below sin 2θ for θ ≤ 45°, so the error is below sin(2θ)/2 (and below 1/2 for any cone).
+    /// Exact where the cone faces u whole (m) or turns from it whole (0).
     pub fn mean_clamped_cosine(&self, u: DVec3) -> f64 {
         let phi = angle(self.axis, u);
         let hi = (phi - self.half_angle).max(0.0).cos();

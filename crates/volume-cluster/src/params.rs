@@ -55,7 +55,7 @@ pub struct VolumeClusterParams {
     /// (some of its faces turned toward the source, some away) takes the link as a whole under the α and
     /// directional transfers: every face below it receives the faces' mean clamped cosine
     /// ([`crate::normal_cone::NormalCone::mean_clamped_cosine`], within sin(2θ)/2 of a face square to the
-    /// link). Wider straddled clusters hand the link to their children, down to the faces where the surface
+    /// link for θ ≤ 45°). Wider straddled clusters hand the link to their children, down to the faces where the surface
     /// turns away from the source: on a smooth surface about √m of a cluster's m faces, a cost per link that
     /// grows with the number of faces. 0 takes every straddled link down to the faces. Default
     /// [`DEFAULT_STRADDLE_ANGLE`].
