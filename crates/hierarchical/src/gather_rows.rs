@@ -207,8 +207,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// sends, w_y = A_y F_{y→r} / Σ, and the number of kernel evaluations; empty when the source is a leaf,
     /// the link sends something else, an end is not a patch, or no leaf sees the receiver.
     fn source_row(&self, recv: u32, l: &Link) -> (Vec<SourceWeight>, u64) {
-        let s = l.source;
-        if l.overlap || self.children[s as usize].1 == 0 || !self.kernel.sends_source_radiosity(l) {
+        if !self.may_need_source_row(recv, l) {
             return (Vec::new(), 0);
         }
         let Some(r) = self.nodes[recv as usize].patch() else {
@@ -216,7 +215,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         };
         let m = self.params.quadrature;
         let mut out = Vec::new();
-        let mut stack = vec![s];
+        let mut stack = vec![l.source];
         let (mut total, mut evaluations) = (0.0, 0);
         while let Some(j) = stack.pop() {
             let (first, count) = self.children[j as usize];
@@ -241,8 +240,21 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         (row, evaluations)
     }
 
+    /// Whether `recv`'s link `l` can have a source row: it sends its source's radiosity, from an inner node
+    /// (of patches, checked in [`Engine::source_row`]) to a patch.
+    fn may_need_source_row(&self, recv: u32, l: &Link) -> bool {
+        !l.overlap
+            && self.children[l.source as usize].1 != 0
+            && self.kernel.sends_source_radiosity(l)
+            && self.nodes[recv as usize].patch().is_some()
+    }
+
     /// Rebuilds the source rows of receivers whose links changed, and of links whose source's subtree
-    /// (`grown`) was split since the last build.
+    /// (`grown`) was split since the last build. A receiver none of whose links can have one keeps no row
+    /// at all rather than an empty one per link (readers take a missing row as an empty one): a cluster
+    /// receiver's links never have one, and the empty rows alone were 24 bytes a link, about 1 GiB at 1e5
+    /// faces under volume clusters. Such a receiver's rows are built afresh once one of its links can have
+    /// one, which needs a changed link or a split source, both of which rebuild the row anyway.
     fn rebuild_source_rows(&mut self, grown: &[bool]) {
         let n = self.nodes.len();
         let todo: Vec<u32> = (0..n as u32)
@@ -256,6 +268,12 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let built: Vec<(Vec<Vec<SourceWeight>>, u64)> = todo
             .par_iter()
             .map(|&r| {
+                if !self.links[r as usize]
+                    .iter()
+                    .any(|l| self.may_need_source_row(r, l))
+                {
+                    return (Vec::new(), 0);
+                }
                 let old = &self.source_rows[r as usize];
                 let renew = self.dirty[r as usize] || old.len() != self.links[r as usize].len();
                 let mut evaluations = 0;
