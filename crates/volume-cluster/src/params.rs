@@ -58,7 +58,7 @@ pub struct VolumeClusterParams {
     /// link for θ ≤ 45°). Wider straddled clusters hand the link to their children, down to the faces where the surface
     /// turns away from the source: on a smooth surface about √m of a cluster's m faces, a cost per link that
     /// grows with the number of faces. 0 takes every straddled link down to the faces. Default
-    /// [`DEFAULT_STRADDLE_ANGLE`].
+    /// 5 (`DEFAULT_STRADDLE_ANGLE`).
     pub straddle_angle: f64,
     /// The hierarchical engine's parameters (ε, oracle, schedule, visibility, gather, interpolation, …).
     #[serde(flatten)]
