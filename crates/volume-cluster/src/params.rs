@@ -178,18 +178,12 @@ impl MethodParams for VolumeClusterParams {
         )?;
         let row_normalisation =
             own_key(&mut table, "row_normalisation", "use closed-scenes or off")?;
-        let straddle_angle = match table.remove("straddle_angle") {
-            None => DEFAULT_STRADDLE_ANGLE,
-            Some(v) => v
-                .as_float()
-                .or_else(|| v.as_integer().map(|i| i as f64))
-                .ok_or_else(|| {
-                    SolveError::param(
-                        "straddle_angle",
-                        format!("{v} is not a number; use an angle in degrees such as 5"),
-                    )
-                })?,
-        };
+        let straddle_angle = own_key::<Option<f64>>(
+            &mut table,
+            "straddle_angle",
+            "use a half-angle in degrees such as 5",
+        )?
+        .unwrap_or(DEFAULT_STRADDLE_ANGLE);
         if table.remove("lazy_linking").is_some() {
             return Err(SolveError::param(
                 "lazy_linking",
