@@ -884,6 +884,17 @@ impl Accel {
         self.visible_ignoring(p, q, usize::MAX, usize::MAX)
     }
 
+    /// [`Accel::visible_between`], also returning what the traversal visited.
+    pub fn visible_between_counting(
+        &self,
+        p: DVec3,
+        fp: FaceId,
+        q: DVec3,
+        fq: FaceId,
+    ) -> (bool, TraversalCost) {
+        self.visible_ignoring(p, q, fp, fq)
+    }
+
     fn visible_ignoring(
         &self,
         p: DVec3,
