@@ -71,6 +71,15 @@ where
     pub(crate) rows: Vec<Vec<RowEntry<T::Coefficient>>>,
     /// Nodes whose links changed since the rows were last built (and new nodes).
     pub(crate) dirty: Vec<bool>,
+    /// Per receiver, how many of its first links the last refinement pass kept (kept links stay first;
+    /// links made since are appended), valid while [`Engine::settled_epsilon`] is set.
+    pub(crate) settled: Vec<u32>,
+    /// The threshold of the last refinement pass, until something a decision reads changes (a solve pass
+    /// changes the sources' radiosity): a pass at the same threshold then keeps the settled links again
+    /// without asking the oracle ([`Engine::refine_pass`]).
+    pub(crate) settled_epsilon: Option<f64>,
+    /// Links the oracle has been asked about, over all refinement passes.
+    pub(crate) decisions: u64,
     /// Per receiver, per link (aligned with `links`): the leaves below the link's source and their
     /// normalised weights in what it sends (A_y F_{y→r}, [`Transport::sends_source_radiosity`]); empty when
     /// the source is a leaf or the link sends something else (its transport's emit).
@@ -146,6 +155,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             irradiance: Vec::with_capacity(n),
             rows: Vec::with_capacity(n),
             dirty: Vec::with_capacity(n),
+            settled: Vec::with_capacity(n),
+            settled_epsilon: None,
+            decisions: 0,
             source_rows: Vec::with_capacity(n),
             split_since: Vec::with_capacity(n),
             row_sources: Vec::new(),
@@ -201,6 +213,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.links.push(Vec::new());
         self.rows.push(Vec::new());
         self.dirty.push(true);
+        self.settled.push(0);
         self.source_rows.push(Vec::new());
         self.split_since.push(false);
         self.radiosity.push(b);
@@ -370,6 +383,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + size_of::<Vec<Link>>()
             + size_of::<Vec<RowEntry<T::Coefficient>>>()
             + size_of::<Vec<Vec<SourceWeight>>>()
+            + 4
             + 2
             + 2 * size_of::<Rgb>()
             + 2 * size_of::<f64>()
@@ -467,6 +481,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         );
         self.pull(&mut b, &mut x);
         (self.radiosity, self.exitance) = (b, x);
+        self.settled_epsilon = None;
         self.operator_changed();
         Ok(())
     }

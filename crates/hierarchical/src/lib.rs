@@ -49,7 +49,8 @@
 //!
 //! ## Steps
 //! Each [`radlab_scene::Solver::step`] is one unit of work: creating initial links, one refinement pass (each
-//! link examined once) or one gather/push-pull pass. The solution is usable after any step.
+//! link examined at most once: one that a pass at the same threshold kept, with no solve pass since, is kept
+//! again without asking the oracle) or one gather/push-pull pass. The solution is usable after any step.
 //!
 //! ## Cost
 //! O(k² + n) links and time for k input faces and n elements (Hanrahan, Salzman & Aupperle 1991): every pair of mutually visible

@@ -289,6 +289,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// One gather/push-pull pass with the coarse correction. Returns the estimated remaining relative error
     /// (infinite until two passes have run on the current links).
     pub(crate) fn solve_pass(&mut self) -> Result<f64, SolveError> {
+        // The sources' radiosity changes: every link's light weight with it.
+        self.settled_epsilon = None;
         if self.dirty.iter().any(|&d| d) {
             self.rebuild_rows();
             self.update_row_scale();

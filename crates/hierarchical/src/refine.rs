@@ -151,7 +151,22 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     /// One refinement pass at threshold `epsilon`: each link is examined once. Returns the number of links
     /// replaced.
+    ///
+    /// A decision reads only the link, its two ends, the source's radiosity and the scene's mean radiosity,
+    /// none of which a refinement pass changes for the links it keeps: so when the last pass ran at the same
+    /// threshold and no solve pass came between (a stage of the scheduled schedule refining until nothing
+    /// changes), the links it kept are kept again without asking the oracle, and only the links made since
+    /// are examined. A stage's passes then cost its links once, not once per level the stage descends.
     pub(crate) fn refine_pass(&mut self, epsilon: f64) -> Result<usize, SolveError> {
+        let settled_valid = self.settled_epsilon == Some(epsilon);
+        let settled = &self.settled;
+        let first_open = |r: usize| {
+            if settled_valid {
+                settled[r] as usize
+            } else {
+                0
+            }
+        };
         let oracle = self.params.oracle;
         let min_size = self.min_size;
         let scale = self.radiosity_scale();
@@ -167,7 +182,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .enumerate()
             .map(|(r, ls)| {
                 let recv = &self.nodes[r];
-                ls.iter()
+                ls[first_open(r)..]
+                    .iter()
                     .map(|l| {
                         let src = &self.nodes[l.source as usize];
                         let w = light_weight(
@@ -194,10 +210,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     .collect()
             })
             .collect();
+        // `decisions[r]` covers the links of receiver r from `first_open(r)` on; the ones before are kept.
         // Elements to split, in id order.
         let mut to_split = Vec::new();
         for (r, (ls, ds)) in self.links.iter().zip(&decisions).enumerate() {
-            for (l, d) in ls.iter().zip(ds) {
+            for (l, d) in ls[first_open(r)..].iter().zip(ds) {
                 if matches!(d, Action::SplitReceiver | Action::SplitBoth) {
                     to_split.push(r as u32);
                 }
@@ -213,6 +230,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .iter()
             .map(|ds| ds.iter().filter(|d| **d != Action::Keep).count())
             .sum();
+        let open_from: Vec<usize> = (0..self.links.len()).map(first_open).collect();
+        self.decisions += decisions.iter().map(|ds| ds.len() as u64).sum::<u64>();
+        // What this pass keeps is settled at this threshold (a receiver's kept links stay first, and the
+        // links made below are appended after them).
+        for (r, ds) in decisions.iter().enumerate() {
+            self.settled[r] =
+                (open_from[r] + ds.iter().filter(|d| **d == Action::Keep).count()) as u32;
+        }
+        self.settled_epsilon = Some(epsilon);
         if replaced == 0 {
             return Ok(0);
         }
@@ -226,9 +252,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             if ds.iter().all(|d| *d == Action::Keep) {
                 continue;
             }
-            let old = std::mem::take(&mut self.links[r]);
+            let mut old = std::mem::take(&mut self.links[r]).into_iter();
             let mut kept = Vec::with_capacity(old.len());
-            for (l, d) in old.into_iter().zip(ds) {
+            kept.extend(old.by_ref().take(open_from[r]));
+            for (l, d) in old.zip(ds) {
                 let s = l.source;
                 match d {
                     Action::Keep => kept.push(l),
@@ -281,5 +308,76 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.last_diff = None;
         self.last_norm = None;
         self.converged = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use radlab_scene::{Accel, Scene, builtin};
+
+    use crate::hierarchy::Engine;
+    use crate::link::PatchKernel;
+    use crate::node::Patch;
+    use crate::params::HierarchicalParams;
+
+    /// The Cornell box's initial links refined at one threshold until a pass changes nothing, forgetting the
+    /// settled links before every pass when `forget`: the engine, the links replaced over all passes, and the
+    /// links there were at the start of each pass.
+    fn refine_to_rest<'a>(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        forget: bool,
+    ) -> (Engine<Patch, PatchKernel<'a>>, u64, u64) {
+        let params = HierarchicalParams::default();
+        let min_size = params.resolve_min_size(scene).expect("min size");
+        let roots = (0..scene.face_count())
+            .map(|f| Patch::root(scene, f))
+            .collect();
+        let kernel = PatchKernel::new(
+            accel,
+            params.quadrature,
+            params.visibility,
+            3,
+            params.gather,
+        );
+        let mut e = Engine::new(roots, kernel, params, min_size).expect("engine");
+        let all = e.pending_sources(false);
+        e.link_roots(&all).expect("links");
+        let (mut replaced, mut at_start) = (0, 0);
+        loop {
+            if forget {
+                e.settled_epsilon = None;
+            }
+            at_start += e.link_count() as u64;
+            let r = e.refine_pass(1e-2).expect("refine") as u64;
+            if r == 0 {
+                break;
+            }
+            replaced += r;
+        }
+        (e, replaced, at_start)
+    }
+
+    #[test]
+    fn refinement_passes_at_one_threshold_ask_only_about_new_links() {
+        let scene = builtin("cornell").expect("cornell");
+        let accel = Accel::new(&scene);
+        let (settled, replaced, _) = refine_to_rest(&scene, &accel, false);
+        let (fresh, _, at_start) = refine_to_rest(&scene, &accel, true);
+        // The same hierarchy and links, in the same order.
+        assert_eq!(settled.nodes.len(), fresh.nodes.len());
+        assert_eq!(settled.form_factors, fresh.form_factors);
+        for (a, b) in settled.links.iter().zip(&fresh.links) {
+            let (sa, sb): (Vec<u32>, Vec<u32>) = (
+                a.iter().map(|l| l.source).collect(),
+                b.iter().map(|l| l.source).collect(),
+            );
+            assert_eq!(sa, sb);
+        }
+        // Settled: each link that ever existed was asked about once (those replaced, and those left).
+        // Afresh: every link at every pass it was there for.
+        assert_eq!(settled.decisions, settled.link_count() as u64 + replaced);
+        assert_eq!(fresh.decisions, at_start);
+        assert!(fresh.decisions > settled.decisions);
     }
 }
