@@ -152,6 +152,22 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             });
             row.push((a, k, c));
         };
+        // Room for every entry the loops below may add, so that the row is not copied as it grows.
+        let face_target = self.is_face_target(t);
+        let mut room = descend.at(t).len();
+        if renew {
+            room += self.links[t as usize].len();
+        }
+        if leaf || face_target {
+            let mut a = self.parent[t as usize];
+            while a != NONE {
+                if below[a as usize].is_some() && (renew || self.dirty[a as usize]) {
+                    room += self.links[a as usize].len();
+                }
+                a = self.parent[a as usize];
+            }
+        }
+        row.reserve_exact(room);
         // Descending links of changed receivers above t that land on t.
         for &(_, a, k) in descend.at(t) {
             evaluate(&mut row, a, k, &self.links[a as usize][k as usize]);
@@ -174,7 +190,6 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 }
             }
         }
-        let face_target = self.is_face_target(t);
         if leaf || face_target {
             let mut a = self.parent[t as usize];
             while a != NONE {
