@@ -315,32 +315,20 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 mod tests {
     use radlab_scene::{Accel, Scene, builtin};
 
-    use crate::hierarchy::Engine;
-    use crate::link::PatchKernel;
-    use crate::node::Patch;
+    use crate::HierarchicalSolver;
     use crate::params::HierarchicalParams;
 
     /// The Cornell box's initial links refined at one threshold until a pass changes nothing, forgetting the
-    /// settled links before every pass when `forget`: the engine, the links replaced over all passes, and the
+    /// settled links before every pass when `forget`: the solver, the links replaced over all passes, and the
     /// links there were at the start of each pass.
     fn refine_to_rest<'a>(
         scene: &'a Scene,
         accel: &'a Accel,
         forget: bool,
-    ) -> (Engine<Patch, PatchKernel<'a>>, u64, u64) {
-        let params = HierarchicalParams::default();
-        let min_size = params.resolve_min_size(scene).expect("min size");
-        let roots = (0..scene.face_count())
-            .map(|f| Patch::root(scene, f))
-            .collect();
-        let kernel = PatchKernel::new(
-            accel,
-            params.quadrature,
-            params.visibility,
-            3,
-            params.gather,
-        );
-        let mut e = Engine::new(roots, kernel, params, min_size).expect("engine");
+    ) -> (HierarchicalSolver<'a>, u64, u64) {
+        let mut s = HierarchicalSolver::new(scene, accel, HierarchicalParams::default(), 3)
+            .expect("solver");
+        let e = s.engine_mut();
         let all = e.pending_sources(false);
         e.link_roots(&all).expect("links");
         let (mut replaced, mut at_start) = (0, 0);
@@ -355,7 +343,7 @@ mod tests {
             }
             replaced += r;
         }
-        (e, replaced, at_start)
+        (s, replaced, at_start)
     }
 
     #[test]
@@ -364,6 +352,7 @@ mod tests {
         let accel = Accel::new(&scene);
         let (settled, replaced, _) = refine_to_rest(&scene, &accel, false);
         let (fresh, _, at_start) = refine_to_rest(&scene, &accel, true);
+        let (settled, fresh) = (settled.engine(), fresh.engine());
         // The same hierarchy and links, in the same order.
         assert_eq!(settled.nodes.len(), fresh.nodes.len());
         assert_eq!(settled.form_factors, fresh.form_factors);

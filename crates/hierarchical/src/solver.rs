@@ -60,6 +60,12 @@ impl<'a> HierarchicalSolver<'a> {
         &self.engine
     }
 
+    /// The engine, to drive its passes one by one in unit tests.
+    #[cfg(test)]
+    pub(crate) fn engine_mut(&mut self) -> &mut Engine<Patch, PatchKernel<'a>> {
+        &mut self.engine
+    }
+
     /// The scene solved.
     pub fn scene(&self) -> &Scene {
         self.scene
