@@ -75,6 +75,14 @@
 //!   555.7 s at 1e3 … 1e5 (fitted slope 1.065, 1.18 from 3e4 to 1e5) and directional 4.29 / 10.21 / 38.98 /
 //!   152.5 / 658.6 s (1.103, 1.21 from 3e4 to 1e5; before: 1.105 and 1.31; its three smaller solves ran
 //!   alone, the rest two at a time): rays, 760 M at 1e5 for either transfer, set the slope of both.
+//! - Rays against the rest (the same series with `visibility = "unoccluded"`, 2026-12-04/05, after
+//!   radlab-hierarchical's refinement passes stopped asking again about links they kept): the rays are 78–90%
+//!   of the solve from 3e3 faces on and one costs k^0.14–0.15 more as the BVH deepens (`cargo bench -p
+//!   radlab-scene --bench ray_depth`: nodes visited per segment grow as log k), so at 16 rays a link the
+//!   fitted slopes are 1.059 isotropic and 1.080 directional (1.17 and 1.23 from 3e4 to 1e5), 0.765 and
+//!   0.924 without rays; at 4 rays a link (`jittered2x2`) 0.958 and 1.008 (1.16 and 1.19 from 3e4 to 1e5).
+//!   The ≤ 1.05 targets hold only as fits flattened by the small end: a solve of O(k) rays through a BVH
+//!   grows as k^1.09 or more. Details in the project's docs/methods.md.
 //!
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Materialising it in the
 //! engine checked the memory budget by walking every node at each split, O(k²): 74% of a 9.15 s set-up at 1e5
