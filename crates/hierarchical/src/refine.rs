@@ -242,7 +242,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         if replaced == 0 {
             return Ok(0);
         }
-        self.check_budget(replaced * 16, to_split.len() * 4)?;
+        if let Err(e) = self.check_budget(replaced * 16, to_split.len() * 4) {
+            // The links are not yet reordered as the settled counts assume.
+            self.settled_epsilon = None;
+            return Err(e);
+        }
         for i in to_split {
             self.split_node(i);
         }
