@@ -81,8 +81,8 @@
 //!   radlab-scene --bench ray_depth`: nodes visited per segment grow as log k), so at 16 rays a link the
 //!   fitted slopes are 1.059 isotropic and 1.080 directional (1.17 and 1.23 from 3e4 to 1e5), 0.765 and
 //!   0.924 without rays; at 4 rays a link (`jittered2x2`) 0.958 and 1.008 (1.16 and 1.19 from 3e4 to 1e5).
-//!   The ≤ 1.05 targets hold only as fits flattened by the small end: a solve of O(k) rays through a BVH
-//!   grows as k^1.09 or more. Details in the project's docs/methods.md.
+//!   The ≤ 1.05 targets hold only as fits flattened by the small end: the rays' time grows as k^1.16 (k^1.02
+//!   rays through a BVH, each k^0.14 dearer). Details in the project's docs/methods.md.
 //!
 //! Hierarchy O(k log k) (built by the constructor, reported apart from the steps). Materialising it in the
 //! engine checked the memory budget by walking every node at each split, O(k²): 74% of a 9.15 s set-up at 1e5
