@@ -158,14 +158,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// changes), the links it kept are kept again without asking the oracle, and only the links made since
     /// are examined. A stage's passes then cost its links once, not once per level the stage descends.
     pub(crate) fn refine_pass(&mut self, epsilon: f64) -> Result<usize, SolveError> {
-        let settled_valid = self.settled_epsilon == Some(epsilon);
-        let settled = &self.settled;
-        let first_open = |r: usize| {
-            if settled_valid {
-                settled[r] as usize
-            } else {
-                0
-            }
+        // Per receiver, its first link the oracle is asked about (those before it are kept).
+        let open_from: Vec<usize> = if self.settled_epsilon == Some(epsilon) {
+            self.settled.iter().map(|&n| n as usize).collect()
+        } else {
+            vec![0; self.links.len()]
         };
         let oracle = self.params.oracle;
         let min_size = self.min_size;
@@ -182,7 +179,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .enumerate()
             .map(|(r, ls)| {
                 let recv = &self.nodes[r];
-                ls[first_open(r)..]
+                ls[open_from[r]..]
                     .iter()
                     .map(|l| {
                         let src = &self.nodes[l.source as usize];
@@ -210,11 +207,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     .collect()
             })
             .collect();
-        // `decisions[r]` covers the links of receiver r from `first_open(r)` on; the ones before are kept.
+        // `decisions[r]` covers the links of receiver r from `open_from[r]` on.
         // Elements to split, in id order.
         let mut to_split = Vec::new();
         for (r, (ls, ds)) in self.links.iter().zip(&decisions).enumerate() {
-            for (l, d) in ls[first_open(r)..].iter().zip(ds) {
+            for (l, d) in ls[open_from[r]..].iter().zip(ds) {
                 if matches!(d, Action::SplitReceiver | Action::SplitBoth) {
                     to_split.push(r as u32);
                 }
@@ -230,7 +227,6 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .iter()
             .map(|ds| ds.iter().filter(|d| **d != Action::Keep).count())
             .sum();
-        let open_from: Vec<usize> = (0..self.links.len()).map(first_open).collect();
         self.decisions += decisions.iter().map(|ds| ds.len() as u64).sum::<u64>();
         // What this pass keeps is settled at this threshold (a receiver's kept links stay first, and the
         // links made below are appended after them).
