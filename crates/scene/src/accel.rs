@@ -36,7 +36,7 @@
 //! apart are told apart at any scale. Quads are split into two triangles; each triangle maps back to its face.
 //! Every ray cast is counted, exactly and whatever the number of threads, so solvers can report rays in
 //! their stats: each thread adds to a counter slot of its own (on its own cache line, so that threads never
-//! contend for one line), and [`Accel::rays_cast`] sums the slots. `Accel` is `Sync`: cast from any number of
+//! contend for one line, and with an ordinary add, not a locked one), and [`Accel::rays_cast`] sums the slots. `Accel` is `Sync`: cast from any number of
 //! rayon threads.
 //!
 //! Segments that share most of their way down the BVH (a form factor's rays between two patches, a point's
@@ -46,6 +46,7 @@
 //! left to that segment's own traversal. Each segment meets the same triangles as alone, so its answer is the
 //! same, and it counts as one ray.
 
+use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
@@ -240,27 +241,44 @@ fn build_bvh(tris: &[Triangle], params: BvhBuildParams) -> CwBvh {
 /// comparable with the serial conversion's fraction of a millisecond).
 const PARALLEL_CONVERSION_MIN: usize = 4096;
 
-/// Number of ray-counter slots ([`RayCounter`]); threads beyond this many share slots (still exact).
+/// Number of ray-counter slots ([`RayCounter`]): the first `COUNTER_SLOTS - 1` threads to cast a ray get one
+/// each, alone; later threads share the last.
 const COUNTER_SLOTS: usize = 64;
+
+/// The slot that threads beyond the first `COUNTER_SLOTS - 1` share.
+const SHARED_SLOT: usize = COUNTER_SLOTS - 1;
 
 /// One counter slot, alone on its cache line pair (128 bytes: adjacent-line prefetchers fetch lines in pairs).
 #[derive(Default)]
 #[repr(align(128))]
 struct CounterSlot(AtomicU64);
 
-/// The slot of the calling thread: threads take slots in the order they first cast a ray.
+/// The slot of the calling thread: threads take slots in the order they first cast a ray, each of the first
+/// [`SHARED_SLOT`] a slot of its own for the life of the process, the rest [`SHARED_SLOT`].
+#[inline(always)]
 fn counter_slot() -> usize {
     static NEXT: AtomicUsize = AtomicUsize::new(0);
     thread_local! {
-        static SLOT: usize = NEXT.fetch_add(1, Ordering::Relaxed) % COUNTER_SLOTS;
+        // `usize::MAX` until the thread first casts a ray (a constant initialiser: no lazy-init check on the
+        // hot path beyond this comparison).
+        static SLOT: Cell<usize> = const { Cell::new(usize::MAX) };
     }
-    SLOT.with(|s| *s)
+    SLOT.with(|s| {
+        let slot = s.get();
+        if slot != usize::MAX {
+            return slot;
+        }
+        let slot = NEXT.fetch_add(1, Ordering::Relaxed).min(SHARED_SLOT);
+        s.set(slot);
+        slot
+    })
 }
 
-/// An exact count over all threads without a shared per-ray atomic: each thread adds (relaxed) to its own
-/// slot, which no other thread writes while fewer than [`COUNTER_SLOTS`] threads have cast rays, and the
-/// total is the sum of the slots. A shared counter costs a cache-line transfer between cores per ray; this
-/// one costs an uncontended add.
+/// An exact count over all threads without a shared per-ray atomic: each thread adds to its own slot, and the
+/// total is the sum of the slots. A slot of one thread alone is only ever written by that thread, so it adds
+/// with a plain load and store (relaxed atomics, no locked read-modify-write); the shared slot adds with
+/// `fetch_add`. A shared counter costs a cache-line transfer between cores per ray, a locked add on a private
+/// line some twenty cycles; this one costs an ordinary add.
 struct RayCounter {
     slots: Box<[CounterSlot]>,
 }
@@ -279,9 +297,14 @@ impl RayCounter {
 
     #[inline(always)]
     fn add(&self, rays: u64) {
-        self.slots[counter_slot()]
-            .0
-            .fetch_add(rays, Ordering::Relaxed);
+        let slot = counter_slot();
+        let counter = &self.slots[slot].0;
+        if slot == SHARED_SLOT {
+            counter.fetch_add(rays, Ordering::Relaxed);
+        } else {
+            // No other thread writes this slot: the load sees this thread's own last store.
+            counter.store(counter.load(Ordering::Relaxed) + rays, Ordering::Relaxed);
+        }
     }
 
     fn total(&self) -> u64 {

@@ -727,6 +727,32 @@ fn answers_are_the_same_from_rayon_threads() {
     );
 }
 
+/// The ray count stays exact when more threads cast at once than the counter has slots of their own (64):
+/// 100 threads, released together, each cast 2,000 rays and segments, and the later threads share one slot.
+#[test]
+fn rays_are_counted_exactly_from_more_threads_than_counter_slots() {
+    let scene = cube_with_blockers(1.0, DVec3::ZERO);
+    let accel = Accel::new(&scene);
+    let (threads, per_thread) = (100u64, 1000u64);
+    let start = std::sync::Barrier::new(threads as usize);
+    std::thread::scope(|s| {
+        for t in 0..threads {
+            let (accel, start) = (&accel, &start);
+            s.spawn(move || {
+                start.wait();
+                for k in 0..per_thread {
+                    let mut r = sampling::rng(31, t * per_thread + k);
+                    let o = dvec3(0.05, 0.05, 0.05) + 0.9 * dvec3(u(&mut r), u(&mut r), u(&mut r));
+                    let q = dvec3(0.05, 0.05, 0.05) + 0.9 * dvec3(u(&mut r), u(&mut r), u(&mut r));
+                    accel.intersect(&Ray::new(o, random_dir(&mut r)));
+                    accel.visible(o, q);
+                }
+            });
+        }
+    });
+    assert_eq!(accel.rays_cast(), 2 * threads * per_thread);
+}
+
 /// An `Accel` built on a pool of 1 thread and one built on 2 (where the build's passes and the wide BVH
 /// conversion split over rayon tasks) give the same answer, bit for bit, to every ray: closest hits from
 /// surface points (the face chosen on edge ties depends on the BVH's order) and visibility between them,
