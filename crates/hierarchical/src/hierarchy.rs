@@ -413,7 +413,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         extra_links: usize,
         extra_nodes: usize,
     ) -> Result<(), SolveError> {
-        let per_node = size_of::<N>() + 4 + size_of::<(u32, u32)>() + size_of::<Vec<Link>>() + 48;
+        let per_node = Self::node_bytes();
         let need =
             held + (extra_links * size_of::<Link>()) as u64 + (extra_nodes * per_node) as u64;
         let budget = self.budget_bytes();
@@ -484,5 +484,36 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.settled_epsilon = None;
         self.operator_changed();
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use radlab_scene::{Accel, builtin};
+
+    use super::{Engine, NodeKind, Transport};
+    use crate::HierarchicalSolver;
+    use crate::params::HierarchicalParams;
+
+    fn node_bytes<N: NodeKind, T: Transport<N>>(_: &Engine<N, T>) -> usize {
+        Engine::<N, T>::node_bytes()
+    }
+
+    /// The budget check prices a node it is about to make as the memory held ([`Engine::bytes`]) counts one:
+    /// with a budget of exactly what the engine holds plus four nodes, four more fit and a fifth does not.
+    #[test]
+    fn the_budget_prices_new_nodes_as_memory_held_counts_them() {
+        let scene = builtin("cornell").expect("cornell");
+        let accel = Accel::new(&scene);
+        let mut s = HierarchicalSolver::new(&scene, &accel, HierarchicalParams::default(), 3)
+            .expect("solver");
+        let e = s.engine_mut();
+        let per_node = node_bytes(e) as u64;
+        let budget = e.bytes() + 4 * per_node;
+        // A budget in MiB that converts back to exactly `budget` bytes (a power of two apart).
+        e.params.memory_budget_mib = budget as f64 / (1024.0 * 1024.0);
+        assert_eq!(e.budget_bytes(), budget);
+        assert!(e.check_budget(0, 4).is_ok());
+        assert!(e.check_budget(0, 5).is_err());
     }
 }
