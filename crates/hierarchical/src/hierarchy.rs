@@ -3,7 +3,7 @@
 //! first), links stored with their receivers, the radiosity of every node (leaves: the solution B = E + ρ H;
 //! inner nodes: the area mean of their children, Σ A_c B_c / A; both over open parts where a leaf is partly
 //! sealed, [`crate::open_share`]) and the transport's further exitance state,
-//! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows ([`crate::gather_rows`]),
+//! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows (the crate's `gather_rows` module),
 //! solution ([`crate::push_pull`]) and the schedules ([`crate::schedule`]) are methods of [`Engine`].
 
 use radlab_scene::{FaceId, Rgb, SolveError};
@@ -59,7 +59,7 @@ where
     /// are empty and the solution is the plain area-mean one, bit for bit).
     pub(crate) has_open: bool,
     /// Per receiver, per link (aligned with `links`): 1/ō_l, ō_l the open share of the link's receiver as
-    /// the link's own coefficients weight it ([`crate::open_share`]), 0 where the receiver is sealed.
+    /// the link's own coefficients weight it (the crate's `open_share` module), 0 where the receiver is sealed.
     pub(crate) link_gain: Vec<Vec<f64>>,
     /// Per node, the factor a leaf's gathered irradiance is capped by, min(1, 1/R'), R' its row sum with
     /// the gains (1 above the leaves).
@@ -244,7 +244,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The open share o ∈ [0, 1] of every node: at a leaf, the transport's estimate of the share of its area
     /// light can reach ([`Transport::open_share`]; 0 for a leaf wholly sealed); above, the area mean of its
     /// children's. A leaf's radiosity and irradiance ([`Engine::radiosity`], [`Engine::irradiance`]) are
-    /// then those of its open part: it receives o A H and sends o A B ([`crate::open_share`]). Where nothing
+    /// then those of its open part: it receives o A H and sends o A B (the crate's `open_share` module). Where nothing
     /// is sealed (or the transport estimates nothing) every entry is exactly 1 and B is the area mean.
     pub fn open_shares(&self) -> &[f64] {
         &self.open

@@ -134,7 +134,7 @@ pub trait Transport<N: NodeKind>: Sync {
     /// Whether `link` sends its source's radiosity (its [`Transport::emit`] is the source's entry of `b`), so
     /// that where the source is an inner node whose leaves and the receiver are patches
     /// ([`NodeKind::patch`]) the engine sends in its place the mean of the leaves' radiosity weighted by how
-    /// much each sees the receiver, A_y F_{y→r} ([`crate::gather_rows`]). By default every link not
+    /// much each sees the receiver, A_y F_{y→r} (the crate's `gather_rows` module). By default every link not
     /// [`Link::clustered`].
     fn sends_source_radiosity(&self, link: &Link) -> bool {
         !link.clustered
@@ -144,7 +144,7 @@ pub trait Transport<N: NodeKind>: Sync {
     /// ([`radlab_scene::open_fraction`]; part of a floor element under a covering sees only the covering's
     /// back), or `None` (the default) when the transport does not estimate it, which is the same as 1. Where
     /// one is below 1 the engine holds every leaf's radiosity and irradiance over its open part
-    /// ([`crate::open_share`]). Any rays it casts must go through the accelerator the solver counts rays
+    /// (the crate's `open_share` module). Any rays it casts must go through the accelerator the solver counts rays
     /// on, and its random stream must depend on the leaf only ([`NodeKind::key`]).
     fn open_share(&self, leaf: &N) -> Option<f64> {
         let _ = leaf;
@@ -152,7 +152,7 @@ pub trait Transport<N: NodeKind>: Sync {
     }
 
     /// The weight of a coefficient in a link's receiver-side open share ō_l = Σ o_t A_t c_t / Σ A_t c_t
-    /// ([`crate::open_share`]): its magnitude (a patch: V F). By default 1 (an area-weighted share). Read
+    /// (the crate's `open_share` module): its magnitude (a patch: V F). By default 1 (an area-weighted share). Read
     /// only when [`Transport::open_share`] gives shares below 1.
     fn coefficient_weight(&self, c: &Self::Coefficient) -> f64 {
         let _ = c;

@@ -41,7 +41,7 @@ pub enum Command {
         /// The experiment's results directory.
         dir: PathBuf,
     },
-    /// Compare runs' answers at the evaluation points (runs/<id>.points.csv): L1, bias, and each pair's
+    /// Compare runs' answers at the evaluation points (`runs/<id>.points.csv`): L1, bias, and each pair's
     /// difference with a bootstrap interval.
     Compare(compare::CompareArgs),
     /// Merge the results of shards (directories of `radlab run --shard`) into one directory.

@@ -38,7 +38,7 @@ pub const QUICKSTART: &str = "experiments/quickstart.toml";
 pub struct RunArgs {
     /// The experiment config (default experiments/quickstart.toml).
     pub experiment: Option<PathBuf>,
-    /// Output directory (default results/<experiment name>).
+    /// Output directory (default `results/<experiment name>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Run only shard I of N (I from 0): runs whose index is I modulo N.
