@@ -1,9 +1,9 @@
 //! The output layer, for any node kind whose hierarchy reaches the input faces: locating a surface point in
 //! the hierarchy (from the node that is the whole face down through its quadtree by containment, radlab-scene's
-//! shared [`radlab_scene::locate::descend`]) and answering radiosity there: constant per leaf, vertex-interpolated (the crate's `gouraud` module), or by a
-//! final gather from every leaf (B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j; Lischinski, Tampieri & Greenberg
-//! 1993, through radlab-scene's shared [`Reconstructor`]). Solvers built on the engine (patches, volume
-//! clusters) share it.
+//! shared [`radlab_scene::locate::descend`]) and answering radiosity there: constant per leaf,
+//! vertex-interpolated (the crate's `gouraud` module), or by a final gather from every leaf
+//! (B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j; Lischinski, Tampieri & Greenberg 1993, through radlab-scene's
+//! shared [`Reconstructor`]). Solvers built on the engine (patches, volume clusters) share it.
 
 use glam::DVec3;
 use radlab_scene::{

@@ -36,8 +36,8 @@
 //! apart are told apart at any scale. Quads are split into two triangles; each triangle maps back to its face.
 //! Every ray cast is counted, exactly and whatever the number of threads, so solvers can report rays in
 //! their stats: each thread adds to a counter slot of its own (on its own cache line, so that threads never
-//! contend for one line, and with an ordinary add, not a locked one), and [`Accel::rays_cast`] sums the slots. `Accel` is `Sync`: cast from any number of
-//! rayon threads.
+//! contend for one line, and with an ordinary add, not a locked one), and [`Accel::rays_cast`] sums the slots.
+//! `Accel` is `Sync`: cast from any number of rayon threads.
 //!
 //! Segments that share most of their way down the BVH (a form factor's rays between two patches, a point's
 //! rays to a polygon) can be traversed together as a packet ([`Accel::visible_many`]; ray packets after Wald,

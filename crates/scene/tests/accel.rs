@@ -727,7 +727,7 @@ fn answers_are_the_same_from_rayon_threads() {
     );
 }
 
-/// The ray count stays exact when more threads cast at once than the counter has slots of their own (64):
+/// The ray count stays exact when more threads cast at once than the counter has slots of their own (63):
 /// 100 threads, released together, each cast 2,000 rays and segments, and the later threads share one slot.
 #[test]
 fn rays_are_counted_exactly_from_more_threads_than_counter_slots() {
