@@ -223,16 +223,14 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         to_split.sort_unstable();
         to_split.dedup();
         to_split.retain(|&i| self.is_leaf(i));
-        let replaced: usize = decisions
-            .iter()
-            .map(|ds| ds.iter().filter(|d| **d != Action::Keep).count())
-            .sum();
-        self.decisions += decisions.iter().map(|ds| ds.len() as u64).sum::<u64>();
         // What this pass keeps is settled at this threshold (a receiver's kept links stay first, and the
         // links made below are appended after them).
+        let mut replaced = 0;
         for (r, ds) in decisions.iter().enumerate() {
-            self.settled[r] =
-                (open_from[r] + ds.iter().filter(|d| **d == Action::Keep).count()) as u32;
+            let changed = ds.iter().filter(|d| **d != Action::Keep).count();
+            replaced += changed;
+            self.decisions += ds.len() as u64;
+            self.settled[r] = (open_from[r] + ds.len() - changed) as u32;
         }
         self.settled_epsilon = Some(epsilon);
         if replaced == 0 {

@@ -43,11 +43,25 @@ const NEAR_STEP: usize = 16;
 const ROUNDS: usize = 7;
 
 struct Workload {
-    near: Vec<[Segment; BUNDLE]>,
-    across: Vec<[Segment; BUNDLE]>,
+    near: Vec<Bundle>,
+    across: Vec<Bundle>,
 }
 
-fn bundle(scene: &Scene, fp: usize, fq: usize, r: &mut Rng) -> [Segment; BUNDLE] {
+/// A bundle of segments between two faces.
+type Bundle = [Segment; BUNDLE];
+
+/// A family's bundles in a workload.
+type Family = fn(&Workload) -> &[Bundle];
+
+/// The two families of bundles, by name.
+const FAMILIES: [(&str, Family); 2] = [("near", |w| &w.near), ("across", |w| &w.across)];
+
+/// A uniform index below `n`.
+fn index(r: &mut Rng, n: usize) -> usize {
+    ((sampling::uniform(r) * n as f64) as usize).min(n - 1)
+}
+
+fn bundle(scene: &Scene, fp: usize, fq: usize, r: &mut Rng) -> Bundle {
     let (a, b) = (scene.polygon(fp), scene.polygon(fq));
     std::array::from_fn(|_| Segment {
         p: a.sample_uniform(sampling::uniform(r), sampling::uniform(r)),
@@ -63,13 +77,11 @@ fn workload(scene: &Scene) -> Workload {
         .partition(|&f| scene.faces[f].normal.dot(scene.faces[f].centroid) < 0.0);
     assert!(!outer.is_empty() && !inner.is_empty(), "two spheres");
     let mut r = sampling::rng(2026, 0);
-    let pick = |v: &[usize], r: &mut Rng| {
-        v[((sampling::uniform(r) * v.len() as f64) as usize).min(v.len() - 1)]
-    };
+    let pick = |v: &[usize], r: &mut Rng| v[index(r, v.len())];
     let mut near = Vec::with_capacity(BUNDLES);
     while near.len() < BUNDLES {
-        let i = ((sampling::uniform(&mut r) * outer.len() as f64) as usize).min(outer.len() - 1);
-        let step = 1 + ((sampling::uniform(&mut r) * NEAR_STEP as f64) as usize).min(NEAR_STEP - 1);
+        let i = index(&mut r, outer.len());
+        let step = 1 + index(&mut r, NEAR_STEP);
         if let Some(&g) = outer.get(i + step) {
             near.push(bundle(scene, outer[i], g, &mut r));
         }
@@ -83,22 +95,28 @@ fn workload(scene: &Scene) -> Workload {
     Workload { near, across }
 }
 
-/// Segments per second over the bundles, each bundle one `visible_many` call; one timed pass.
-fn rate(a: &Accel, bundles: &[[Segment; BUNDLE]]) -> f64 {
-    let t = Instant::now();
+/// Casts every bundle, each one `visible_many` call; returns how many segments were unobstructed.
+fn cast(a: &Accel, bundles: &[Bundle]) -> usize {
     let mut out = [false; BUNDLE];
-    let mut seen = 0usize;
-    for b in bundles {
-        a.visible_many(b, &mut out);
-        seen += out.iter().filter(|&&v| v).count();
-    }
-    black_box(seen);
+    bundles
+        .iter()
+        .map(|b| {
+            a.visible_many(b, &mut out);
+            out.iter().filter(|&&v| v).count()
+        })
+        .sum()
+}
+
+/// Segments per second over the bundles; one timed pass.
+fn rate(a: &Accel, bundles: &[Bundle]) -> f64 {
+    let t = Instant::now();
+    black_box(cast(a, bundles));
     (bundles.len() * BUNDLE) as f64 / t.elapsed().as_secs_f64()
 }
 
 /// Mean length in face sizes, nodes and triangles visited per segment; and that the packets agree with
 /// single segments.
-fn counts(scene: &Scene, a: &Accel, bundles: &[[Segment; BUNDLE]]) -> (f64, f64, f64) {
+fn counts(scene: &Scene, a: &Accel, bundles: &[Bundle]) -> (f64, f64, f64) {
     let h = (scene.faces.iter().map(|f| f.area).sum::<f64>() / scene.faces.len() as f64).sqrt();
     let (mut len, mut nodes, mut tris) = (0.0, 0u64, 0u64);
     let mut out = [false; BUNDLE];
@@ -135,13 +153,7 @@ fn ray_depth(c: &mut Criterion) {
             (scene, accel, w)
         })
         .collect();
-    for (family, pick) in [
-        (
-            "near",
-            (|w: &Workload| &w.near[..]) as fn(&Workload) -> &[[Segment; BUNDLE]],
-        ),
-        ("across", |w: &Workload| &w.across[..]),
-    ] {
+    for (family, pick) in FAMILIES {
         let mut ns: Vec<Vec<f64>> = vec![Vec::new(); SIZES.len()];
         for _ in 0..ROUNDS {
             for (i, (_, a, w)) in cases.iter().enumerate() {
@@ -174,21 +186,13 @@ fn ray_depth(c: &mut Criterion) {
         );
     }
 
-    for (family, near) in [("near", true), ("across", false)] {
+    for (family, pick) in FAMILIES {
         let mut g = c.benchmark_group(format!("visibility_by_faces/{family}"));
         g.throughput(Throughput::Elements((BUNDLES * BUNDLE) as u64));
         for (scene, a, w) in &cases {
-            let bundles = if near { &w.near } else { &w.across };
+            let bundles = pick(w);
             g.bench_function(BenchmarkId::from_parameter(scene.faces.len()), |b| {
-                let mut out = [false; BUNDLE];
-                b.iter(|| {
-                    let mut seen = 0usize;
-                    for s in bundles {
-                        a.visible_many(s, &mut out);
-                        seen += out.iter().filter(|&&v| v).count();
-                    }
-                    black_box(seen)
-                })
+                b.iter(|| black_box(cast(a, bundles)))
             });
         }
         g.finish();
