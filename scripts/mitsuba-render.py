@@ -17,13 +17,16 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+if len(sys.argv) < 2 or not os.path.isfile(os.path.join(sys.argv[1], "scene.json")):
+    sys.exit(__doc__.split("\n\n")[-1].strip() + "\n(EXPORT_DIR must hold the export's scene.json)")
 args = sys.argv[1:] + [None] * 6
 d = args[0]
 variant = args[1] or "llvm_ad_rgb"
 spp, threads, renders, seed = (int(a) if a else v for a, v in zip(args[2:6], (64, 2, 3, 1)))
 mi.set_variant(variant)
 dr.set_thread_count(threads)
-js = json.load(open(os.path.join(d, "scene.json")))
+with open(os.path.join(d, "scene.json")) as f:
+    js = json.load(f)
 c = js["camera"]
 scene = {
     "type": "scene",
