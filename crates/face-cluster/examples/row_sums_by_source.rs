@@ -15,7 +15,9 @@
 
 use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver, FaceNode};
 use radlab_hierarchical::NodeKind;
-use radlab_scene::{Accel, AreaSampler, MethodParams, Scene, Solver, Step, sampling};
+use radlab_method::{MethodParams, Solver, Step};
+use radlab_scene::{AreaSampler, Scene, sampling};
+use radlab_visibility::Accel;
 
 /// The material of a node's faces (of its first face: a face cluster holds one connected mesh, and the
 /// materials checked here do not change within one); `None` for a volume.

@@ -16,7 +16,7 @@
 //! within the range its normal cone allows (exactly c when every face of N faces x:
 //! [`crate::clamped_irradiance::CosineFit::of_node`]). Other nodes are opened; a face is gathered
 //! exactly, by its point-to-polygon factor (Baum, Rushmeier & Winget 1989, eq. 3) and the shared final
-//! gather's visibility rays ([`radlab_scene::final_gather::GatherSettings::visible_share`]: 16 jittered rays
+//! gather's visibility rays ([`radlab_answer::final_gather::GatherSettings::visible_share`]: 16 jittered rays
 //! toward an emitter, one toward another face's centroid). Nodes holding an emitter are always opened, so
 //! direct light is the flat gather's, exact up to its visibility estimate; nodes wholly behind x's plane, or
 //! whose faces all turn away from x, are skipped. A far node's visibility is one ray from x to one of its
@@ -49,7 +49,7 @@
 //! (and one per patch leaf), linear in k as the values' pass is, once per solution. It gathers an emitter
 //! whole, with its 16 jittered rays (the refinement may have split it into hundreds of patches, each of
 //! which would cost 16 rays at each of the k queries), and so weights each ray by the point kernel it stands
-//! for ([`radlab_scene::final_gather::GatherSettings::kernel_weighted_share`]): F V then estimates the light
+//! for ([`radlab_answer::final_gather::GatherSettings::kernel_weighted_share`]): F V then estimates the light
 //! that gets through, where the share of the light's area that is seen, times F, undercounts a large light
 //! whose fainter far side is hidden first (faces in valleys near the 10⁵-face terrain's border, seeing its
 //! 4 × 4 light past a ridge, took about 2% too little, 0.7% elsewhere, and passed it on to the answers).
@@ -58,11 +58,12 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
-use radlab_scene::final_gather::{FarField, GatherSettings, query_key};
-use radlab_scene::form_factor::point_polygon;
-use radlab_scene::gouraud::ElementValue;
+use radlab_answer::final_gather::{FarField, GatherSettings, query_key};
+use radlab_answer::gouraud::ElementValue;
+use radlab_kernels::form_factor::point_polygon;
 use radlab_scene::sampling::{self, mix64};
-use radlab_scene::{Accel, FaceId, Rgb, Scene};
+use radlab_scene::{FaceId, Rgb, Scene};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 use serde::{Deserialize, Serialize};
@@ -109,7 +110,7 @@ pub enum NearField {
     /// Every face by its exact point-to-polygon factor and its one value (this module's gather). The default.
     #[default]
     Off,
-    /// Through radlab-scene's shared final gather over the same values ([`radlab_scene::final_gather`], the
+    /// Through radlab-scene's shared final gather over the same values ([`radlab_answer::final_gather`], the
     /// gather every finite-element method answers with): a face nearer the point than its diameter is
     /// gathered as 4 × 4 sub-polygons, each with its own visibility ray and a radiosity re-gathered at it
     /// (Lischinski, Tampieri & Greenberg 1993), so light moves within the face toward its lit side. The far

@@ -29,7 +29,8 @@
 //! does not. Each face draws from its own stream (seed, face), and the sums are made in face order, so the
 //! factors do not depend on the number of threads.
 
-use radlab_scene::{Accel, AreaSampler, Rgb, Scene, sampling};
+use radlab_scene::{AreaSampler, Rgb, Scene, sampling};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

@@ -36,15 +36,15 @@
 use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
+use radlab_answer::Reconstruction;
+use radlab_answer::final_gather::{FinalGather, GatherSettings};
+use radlab_answer::gouraud::{ElementValue, interpolate_corners};
 use radlab_hierarchical::{
     Engine, ErrorNorm, HierarchicalParams, LinearState, NodeKind, PatchKernel, SurfaceOutput,
 };
-use radlab_scene::final_gather::{FinalGather, GatherSettings};
-use radlab_scene::gouraud::{ElementValue, interpolate_corners};
-use radlab_scene::{
-    Accel, FaceId, MethodParams, Reconstruction, Rgb, Scene, Solution, SolveError, Solver, Stats,
-    Step, VertexAdjacency,
-};
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
+use radlab_scene::{FaceId, Rgb, Scene, VertexAdjacency};
+use radlab_visibility::Accel;
 use radlab_volume_cluster::RowNormalisation;
 use radlab_volume_cluster::enclosure::enclosures;
 use rayon::prelude::*;

@@ -68,10 +68,9 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{GatherAt, Link, NodeKind, NodeView, Patch, PatchKernel, Transport};
-use radlab_scene::{
-    Accel, Ray, Rgb,
-    form_factor::{VisibilitySampling, point_polygon_vector},
-};
+use radlab_kernels::form_factor::{VisibilitySampling, point_polygon_vector};
+use radlab_scene::{Ray, Rgb};
+use radlab_visibility::Accel;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 

@@ -15,8 +15,10 @@ use radlab_face_cluster::{
     ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
     FaceContext, GatherValues, NearField,
 };
-use radlab_scene::form_factor::closed_form::point_to_parallel_rectangle_corner as corner;
-use radlab_scene::{Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, builtin};
+use radlab_kernels::form_factor::closed_form::point_to_parallel_rectangle_corner as corner;
+use radlab_method::{MethodParams, Solution};
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder, builtin};
+use radlab_visibility::Accel;
 
 /// Howell's factor from a differential area at (x, y, 0) facing +z to the parallel w × d rectangle
 /// [0, w] × [0, d] at height h: four corner rectangles (Howell B-3).
@@ -427,7 +429,7 @@ fn near_field_work_and_memory_are_counted() {
             }
             *pass = s.answer_kernel_evaluations() - before;
         }
-        (passes, radlab_scene::Solver::stats(&s).bytes)
+        (passes, radlab_method::Solver::stats(&s).bytes)
     };
     let n = queries.len() as u64;
     let (off, off_bytes) = answer("\"off\"");
@@ -442,7 +444,7 @@ fn near_field_work_and_memory_are_counted() {
         "a second pass: {second} kernels for {n} queries over {k} faces"
     );
     assert!(first > second, "first pass {first}, second {second}");
-    let sources = k as usize * std::mem::size_of::<radlab_scene::gouraud::ElementValue>();
+    let sources = k as usize * std::mem::size_of::<radlab_answer::gouraud::ElementValue>();
     assert!(
         near_bytes >= off_bytes + sources as u64,
         "bytes {near_bytes} with the near field, {off_bytes} without"

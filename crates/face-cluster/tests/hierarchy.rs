@@ -6,8 +6,8 @@ use glam::{DVec3, dvec3};
 use radlab_face_cluster::{
     FaceClusterError, FaceClusterParams, FaceClusterTree, bounds::angle_between, digest,
 };
-use radlab_scene::test_scenes::scaled;
 use radlab_scene::{Material, Scene, SceneBuilder, builtin, sampling};
+use radlab_testkit::scaled;
 
 fn build(scene: &Scene) -> FaceClusterTree {
     FaceClusterTree::build(scene, &FaceClusterParams::default()).expect("builds")

@@ -7,8 +7,10 @@ use common::params;
 
 use glam::{DVec3, dvec3};
 use radlab_face_cluster::{FaceClusterSolver, FaceNode};
-use radlab_scene::form_factor::point_polygon;
-use radlab_scene::{Accel, Material, Rgb, Scene, SceneBuilder, Solution};
+use radlab_kernels::form_factor::point_polygon;
+use radlab_method::Solution;
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder};
+use radlab_visibility::Accel;
 
 /// Adds the box `lo`..`hi` as six quads on eight shared vertices (one dual-connected part), normals out, or
 /// in when `inward`.

@@ -3,7 +3,9 @@
 //! body and keeps 1 − A_in/A_out for itself (Siegel & Howell, enclosure and reciprocity relations).
 
 use radlab_face_cluster::{FaceClusterParams, FaceClusterTree, Landing, SELF_RAYS, SelfExchange};
-use radlab_scene::{Accel, MethodParams, Rgb, builtin};
+use radlab_method::MethodParams;
+use radlab_scene::{Rgb, builtin};
+use radlab_visibility::Accel;
 
 /// The concentric-spheres scene's two roots, inner (facing out) first, with their traced self-shares.
 fn concentric(threads: usize) -> (FaceClusterTree, SelfExchange) {

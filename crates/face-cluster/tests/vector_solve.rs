@@ -7,10 +7,9 @@ use common::{params, solve};
 
 use glam::dvec3;
 use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver, FaceNode};
-use radlab_scene::{
-    Accel, Material, MethodParams, Rgb, Scene, SceneBuilder, Solution, SolveError, Solver, Step,
-    builtin,
-};
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Step};
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder, builtin};
+use radlab_visibility::Accel;
 
 /// The floor's material (ρ = 0.5) and a light's (E = `e`, ρ = 0), added to `b`.
 fn floor_and_light_materials(b: &mut SceneBuilder, e: f64) -> (u32, u32) {
@@ -174,7 +173,7 @@ fn near_source_gives_the_exact_polygon_irradiance() {
     solve(&mut s);
     let light = scene.polygon(scene.face_count() - 1);
     let c = dvec3(0.5, 0.5, 0.0);
-    let want = 0.5 * 10.0 * radlab_scene::form_factor::point_polygon(c, glam::DVec3::Z, &light);
+    let want = 0.5 * 10.0 * radlab_kernels::form_factor::point_polygon(c, glam::DVec3::Z, &light);
     assert!(want > 0.5, "{want}");
     for f in 0..scene.face_count() - 1 {
         let b = s.radiosity_at(f, scene.faces[f].centroid).x;
@@ -193,7 +192,7 @@ fn near_source_gives_the_exact_polygon_irradiance() {
 #[test]
 fn a_linear_field_follows_a_light_to_the_side() {
     use radlab_hierarchical::NodeKind;
-    use radlab_scene::form_factor::point_polygon;
+    use radlab_kernels::form_factor::point_polygon;
     let scene = floor_and_quad(
         10,
         &[
@@ -794,7 +793,7 @@ fn open_book(n: usize, rho: f64) -> Scene {
 /// the crease to under 0.1 at the far edges.
 #[test]
 fn traced_light_reaches_each_face_where_the_trace_landed() {
-    use radlab_scene::form_factor::point_polygon;
+    use radlab_kernels::form_factor::point_polygon;
     let (n, rho, rays) = (16, 0.01, 1024);
     let scene = open_book(n, rho);
     let accel = Accel::new(&scene);

@@ -9,7 +9,9 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use radlab_hierarchical::{Gather, HierarchicalParams, HierarchicalSolver};
-use radlab_scene::{Accel, Scene, Solution, Solver, Step, builtin, evaluation_points};
+use radlab_method::{Solution, Solver, Step, evaluation_points};
+use radlab_scene::{Scene, builtin};
+use radlab_visibility::Accel;
 
 fn solve<'a>(scene: &'a Scene, accel: &'a Accel, p: HierarchicalParams) -> HierarchicalSolver<'a> {
     let mut s = HierarchicalSolver::new(scene, accel, p, 1).expect("valid parameters");

@@ -6,7 +6,8 @@
 //! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows (the crate's `gather_rows` module),
 //! solution ([`crate::push_pull`]) and the schedules ([`crate::schedule`]) are methods of [`Engine`].
 
-use radlab_scene::{FaceId, Rgb, SolveError};
+use radlab_method::SolveError;
+use radlab_scene::{FaceId, Rgb};
 
 use crate::link::Link;
 use crate::node::NodeKind;
@@ -329,8 +330,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     }
 
     /// The solver statistics of this engine, with the rays its owner counted and the bytes it holds besides.
-    pub fn stats(&self, rays: u64, extra_bytes: u64) -> radlab_scene::Stats {
-        radlab_scene::Stats {
+    pub fn stats(&self, rays: u64, extra_bytes: u64) -> radlab_method::Stats {
+        radlab_method::Stats {
             steps: self.steps(),
             elements: self.leaf_count() as u64,
             links: self.link_count() as u64,
@@ -489,7 +490,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
 #[cfg(test)]
 mod tests {
-    use radlab_scene::{Accel, builtin};
+    use radlab_scene::builtin;
+    use radlab_visibility::Accel;
 
     use super::{Engine, NodeKind, Transport};
     use crate::HierarchicalSolver;

@@ -25,7 +25,7 @@
 //! | `tolerance` | 1e-4 | estimated relative error at which solving stops |
 //! | `max_steps` | 100000 | hard stop, reported as `Step::Capped` (a cap, not a convergence) |
 //! | `gather` | `leaf` | `leaf` (kernel integrated at each leaf for every link above it; exact form-factor sums) or `link` (classic per-link mean, pushed) |
-//! | `reconstruction` | `final-gather` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_scene::reconstruction); the default chosen by measurement ([`DEFAULT_RECONSTRUCTION`]) |
+//! | `reconstruction` | `final-gather` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_answer::reconstruction); the default chosen by measurement ([`DEFAULT_RECONSTRUCTION`]) |
 //! | `memory_budget_mib` | 4096 | refuse to hold more |
 //!
 //! Every quantity is relative (ε, tolerance) or relative to the scene's size (the default minimum element), so
@@ -33,7 +33,7 @@
 //!
 //! ## What a leaf holds: radiosity over its open part
 //! Each leaf's open share o ∈ [0, 1] is estimated when it is first solved as a leaf (radlab-scene's
-//! [`radlab_scene::open_fraction`]: 16 stratified points × 8 cosine rays, a point sealed when every ray meets
+//! [`radlab_kernels::open_fraction`]: 16 stratified points × 8 cosine rays, a point sealed when every ray meets
 //! the back of a face; 0 for a leaf wholly under a floor covering or behind a lamp mounted on the ceiling),
 //! with area-sampled visibility only (the default; with `centre` or `unoccluded` o = 1). A leaf's radiosity B
 //! ([`Engine::radiosity`], [`HierarchicalSolver::leaves`]) is then that of its open part, B = E + ρ H' with H'
@@ -48,7 +48,7 @@
 //! a sealed point gets E there too, and it leaves wholly sealed leaves out of its sources.
 //!
 //! ## Steps
-//! Each [`radlab_scene::Solver::step`] is one unit of work: creating initial links, one refinement pass (each
+//! Each [`radlab_method::Solver::step`] is one unit of work: creating initial links, one refinement pass (each
 //! link examined at most once: one that a pass at the same threshold kept, with no solve pass since, is kept
 //! again without asking the oracle) or one gather/push-pull pass. The solution is usable after any step.
 //!

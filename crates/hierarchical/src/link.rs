@@ -18,13 +18,14 @@
 //! any thread count and any schedule.
 
 use glam::DVec3;
-use radlab_scene::{
-    Accel, facing_away,
-    form_factor::{VisibilitySampling, point_polygon, receiver_points, visibility_fraction},
-    sampling,
+use radlab_kernels::form_factor::{
+    VisibilitySampling, point_polygon, receiver_points, visibility_fraction,
 };
+use radlab_scene::{facing_away, sampling};
+use radlab_visibility::Accel;
 
-use radlab_scene::{Rgb, Scene, open_fraction::open_share};
+use radlab_kernels::open_fraction::open_share;
+use radlab_scene::{Rgb, Scene};
 
 use crate::node::{NodeKind, Patch};
 use crate::params::Gather;
@@ -117,7 +118,7 @@ impl<'a> PatchKernel<'a> {
     }
 
     /// The same kernel estimating every leaf's open share in `scene` (the scene `accel` was built from):
-    /// [`radlab_scene::open_fraction`], 16 stratified points × 8 cosine rays, the stream keyed by the leaf's
+    /// [`radlab_kernels::open_fraction`], 16 stratified points × 8 cosine rays, the stream keyed by the leaf's
     /// [`NodeKind::key`]. Only with area-sampled visibility: a link's visibility carries its source's sealed
     /// share only when its rays start all over the source; with one centre ray or none an element is open or
     /// closed as a whole, and the share stays 1.

@@ -1,13 +1,14 @@
 //! Locating a surface point in a face's quadtree, through radlab-scene's shared locator: the engine's nodes
 //! seen as an [`ElementTree`] (one top-level element per face, the node that is the whole face), descended by
-//! containment ([`radlab_scene::locate::descend`]). For interpolation within an element, a point's coordinates
+//! containment ([`radlab_answer::locate::descend`]). For interpolation within an element, a point's coordinates
 //! in the face's parameter space ([`radlab_scene::Polygon::param_coords`]), where every element is a lattice
 //! polygon (see [`crate::node::Patch::uv`]).
 
 use std::ops::Range;
 
 use glam::{DVec2, DVec3};
-use radlab_scene::{ElementTree, FaceId, Polygon};
+use radlab_answer::ElementTree;
+use radlab_scene::{FaceId, Polygon};
 
 use crate::hierarchy::Engine;
 use crate::node::{LATTICE, NodeKind, Patch};

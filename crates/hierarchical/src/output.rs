@@ -1,14 +1,14 @@
 //! The output layer, for any node kind whose hierarchy reaches the input faces: locating a surface point in
 //! the hierarchy (from the node that is the whole face down through its quadtree by containment, radlab-scene's
-//! shared [`radlab_scene::locate::descend`]) and answering radiosity there: constant per leaf,
+//! shared [`radlab_answer::locate::descend`]) and answering radiosity there: constant per leaf,
 //! vertex-interpolated (the crate's `gouraud` module), or by a final gather from every leaf
 //! (B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j; Lischinski, Tampieri & Greenberg 1993, through radlab-scene's
 //! shared [`Reconstructor`]). Solvers built on the engine (patches, volume clusters) share it.
 
 use glam::DVec3;
-use radlab_scene::{
-    Accel, FaceId, Reconstruction, Reconstructor, Rgb, Scene, gouraud::ElementValue,
-};
+use radlab_answer::{Reconstruction, Reconstructor, gouraud::ElementValue};
+use radlab_scene::{FaceId, Rgb, Scene};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 use crate::gouraud::{face_corner_values, interpolate};
@@ -120,7 +120,7 @@ pub fn locate<N: NodeKind, T: Transport<N>>(
     if engine.nodes()[i as usize].patch().is_none() {
         return Some(i);
     }
-    Some(radlab_scene::locate::descend(&Quadtrees(engine), i, point))
+    Some(radlab_answer::locate::descend(&Quadtrees(engine), i, point))
 }
 
 /// Every leaf that is a quadtree element, as the shared reconstructions see it, with its open share (a

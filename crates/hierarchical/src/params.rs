@@ -4,7 +4,9 @@
 //! (serde kebab-case), every field has a documented default, and [`HierarchicalParams::coarse`] and
 //! [`HierarchicalParams::reference`] are named presets.
 
-use radlab_scene::{MethodParams, Reconstruction, SolveError, form_factor::VisibilitySampling};
+use radlab_answer::Reconstruction;
+use radlab_kernels::form_factor::VisibilitySampling;
+use radlab_method::{MethodParams, SolveError};
 use serde::{Deserialize, Serialize};
 
 /// The default minimum element size as a fraction of the scene's bounding-box diagonal.

@@ -26,7 +26,8 @@
 //!
 //! Reductions are sequential in node order, so results are bit-identical for any thread count.
 
-use radlab_scene::{Rgb, SolveError};
+use radlab_method::SolveError;
+use radlab_scene::Rgb;
 use rayon::prelude::*;
 
 use crate::hierarchy::{Engine, NONE};

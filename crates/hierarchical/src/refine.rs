@@ -11,7 +11,7 @@
 //! the new nodes are numbered in a fixed order, and each link's rays come from a stream hashed from its two
 //! node ids, so the hierarchy is the same for any thread count.
 
-use radlab_scene::SolveError;
+use radlab_method::SolveError;
 use rayon::prelude::*;
 
 use crate::hierarchy::Engine;
@@ -311,7 +311,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
 #[cfg(test)]
 mod tests {
-    use radlab_scene::{Accel, Scene, builtin};
+    use radlab_scene::{Scene, builtin};
+    use radlab_visibility::Accel;
 
     use crate::HierarchicalSolver;
     use crate::params::HierarchicalParams;

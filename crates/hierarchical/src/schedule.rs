@@ -12,7 +12,8 @@
 //! A step is one unit of work: a linking step, a refinement pass or a solution pass. Transitions that need no
 //! work happen inside the step that follows them.
 
-use radlab_scene::{Accel, SolveError, Step};
+use radlab_method::{SolveError, Step};
+use radlab_visibility::Accel;
 
 use crate::hierarchy::{Engine, Phase};
 use crate::node::NodeKind;

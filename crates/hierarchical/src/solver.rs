@@ -2,9 +2,9 @@
 //! the [`Solver`] trait, and its [`Solution`]: radiosity constant per leaf, or vertex-interpolated
 //! ([`crate::gouraud`]), at any point of any face.
 
-use radlab_scene::{
-    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
-};
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
+use radlab_scene::{FaceId, Rgb, Scene};
+use radlab_visibility::Accel;
 
 use crate::hierarchy::Engine;
 use crate::link::PatchKernel;

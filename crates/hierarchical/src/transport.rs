@@ -141,7 +141,7 @@ pub trait Transport<N: NodeKind>: Sync {
     }
 
     /// The open share o ∈ [0, 1] of leaf `leaf`: the share of its area light can reach at all
-    /// ([`radlab_scene::open_fraction`]; part of a floor element under a covering sees only the covering's
+    /// ([`radlab_kernels::open_fraction`]; part of a floor element under a covering sees only the covering's
     /// back), or `None` (the default) when the transport does not estimate it, which is the same as 1. Where
     /// one is below 1 the engine holds every leaf's radiosity and irradiance over its open part
     /// (the crate's `open_share` module). Any rays it casts must go through the accelerator the solver counts rays

@@ -3,11 +3,11 @@
 //! the same scene, and invariances (scale, thread count, schedule).
 
 use glam::{DVec3, dvec3};
+use radlab_answer::Reconstruction;
 use radlab_hierarchical::{Gather, HierarchicalParams, HierarchicalSolver, Oracle, Schedule};
-use radlab_scene::{
-    Accel, Material, MethodParams, Reconstruction, Rgb, Scene, SceneBuilder, Solution, Solver,
-    Step, evaluation_points,
-};
+use radlab_method::{MethodParams, Solution, Solver, Step, evaluation_points};
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder};
+use radlab_visibility::Accel;
 
 /// The defaults, answering points with the leaves' own values (`constant`): what these tests compare.
 fn leaf_params() -> HierarchicalParams {
@@ -99,7 +99,7 @@ fn furnace_cube_and_sphere_give_e_over_one_minus_rho() {
                     reconstruction,
                     epsilon: 0.01,
                     min_element_size: Some(scene.diagonal() / 30.0),
-                    visibility: radlab_scene::form_factor::VisibilitySampling::Jittered2x2,
+                    visibility: radlab_kernels::form_factor::VisibilitySampling::Jittered2x2,
                     ..leaf_params()
                 };
                 let s = solve(&scene, &accel, p);
@@ -198,7 +198,7 @@ fn error_against_matrix_falls_as_epsilon_shrinks() {
     // reconstruction.
     let mp = radlab_matrix::MatrixParams {
         element_size: Some(h),
-        reconstruction: radlab_scene::Reconstruction::Constant,
+        reconstruction: radlab_answer::Reconstruction::Constant,
         ..radlab_matrix::MatrixParams::default()
     };
     let mut m = radlab_matrix::MatrixSolver::new(&scene, &accel, mp, 5).expect("matrix");
@@ -435,8 +435,8 @@ fn emitted_power_is_absorbed_under_the_light_driven_default_schedule() {
 /// its floor over x, y ∈ [0.13, 0.71]: with elements no smaller than 0.25 the panel's edges cross floor
 /// leaves, which then lie partly under it, where they see only its back.
 fn covered_room() -> Scene {
-    radlab_scene::test_scenes::room("covered-room", &|b| {
-        let m = radlab_scene::test_scenes::material(b, "panel", 0.5, 0.0);
+    radlab_testkit::room("covered-room", &|b| {
+        let m = radlab_testkit::material(b, "panel", 0.5, 0.0);
         let (lo, hi, z) = (0.13, 0.71, 1e-3);
         b.add_polygon_points(
             &[

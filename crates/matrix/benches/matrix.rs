@@ -16,7 +16,9 @@ use std::hint::black_box;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use radlab_matrix::{Iteration, MatrixParams, MatrixSolver};
-use radlab_scene::{Accel, Rgb, Solver, Step};
+use radlab_method::{Solver, Step};
+use radlab_scene::Rgb;
+use radlab_visibility::Accel;
 
 const METHODS: [Iteration; 3] = [
     Iteration::Jacobi,

@@ -23,10 +23,13 @@
 use std::ops::Range;
 
 use glam::DVec3;
-use radlab_scene::{
-    Accel, ElementMesh, Scene, SolveError, facing_away,
-    form_factor::{VisibilitySampling, polygon_polygon_unoccluded, visibility_fraction},
+use radlab_answer::ElementMesh;
+use radlab_kernels::form_factor::{
+    VisibilitySampling, polygon_polygon_unoccluded, visibility_fraction,
 };
+use radlab_method::SolveError;
+use radlab_scene::{Scene, facing_away};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 /// Unordered pairs assembled per step at least (about a million rays with 4 × 4 visibility), so steps are
@@ -42,7 +45,7 @@ const TILE: usize = 64;
 /// Bytes held per element besides the matrix row: area, ρ, E, B and up to six solver vectors (RGB f64),
 /// plus the element itself in the mesh.
 pub fn bytes_per_element() -> u64 {
-    (8 + 10 * 24 + size_of::<radlab_scene::Element>() + 8) as u64
+    (8 + 10 * 24 + size_of::<radlab_answer::Element>() + 8) as u64
 }
 
 /// Bytes the solver needs for `n` elements: the dense n × n matrix of f64 plus per-element data.

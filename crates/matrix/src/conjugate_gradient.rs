@@ -13,7 +13,8 @@
 //! [`crate::linear_system`]; when the recursively updated residual meets the stopping rule it is recomputed
 //! from B before convergence is declared (and the recurrence restarted from it if it no longer does).
 
-use radlab_scene::{Rgb, SolveError};
+use radlab_method::SolveError;
+use radlab_scene::Rgb;
 use rayon::prelude::*;
 
 use crate::linear_system::{StopRule, System, area_l1, gather};

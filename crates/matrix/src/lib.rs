@@ -19,9 +19,9 @@
 //!   fixed at B = E. All three stop on the same rule (`linear_system.rs`): relative residual (area-weighted
 //!   L1) below `tolerance × (1 − ρ_max)`, which bounds the relative error of B by `tolerance`.
 //! - **Steps**: assembly takes the first steps (blocks of whole rows holding at least max(65,536, 16 n)
-//!   element pairs each; 7 steps for ~940 elements), then one step per iteration; [`Solver::step`](radlab_scene::Solver::step) returns `Converged` once the rule is met or
+//!   element pairs each; 7 steps for ~940 elements), then one step per iteration; [`Solver::step`](radlab_method::Solver::step) returns `Converged` once the rule is met or
 //!   `max_iterations` is reached ([`MatrixSolver::hit_iteration_cap`] tells which).
-//! - **Solution queries** (`reconstruction`, radlab_scene::reconstruction): `constant` answers B of the element
+//! - **Solution queries** (`reconstruction`, radlab_answer::reconstruction): `constant` answers B of the element
 //!   containing the point; `gouraud` interpolates vertex values (least-squares fits to the surrounding
 //!   elements) over each face's elements; `final-gather` recomputes B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j
 //!   from every element with the exact point-to-polygon factor and visibility rays (Lischinski, Tampieri & Greenberg 1993). The gather's
@@ -82,5 +82,5 @@ pub use params::{
     DEFAULT_MAX_ITERATIONS, DEFAULT_MEMORY_BUDGET_MIB, DEFAULT_QUADRATURE, DEFAULT_RECONSTRUCTION,
     DEFAULT_TOLERANCE, Iteration, MAX_QUADRATURE, MatrixParams,
 };
-pub use radlab_scene::form_factor::VisibilitySampling;
+pub use radlab_kernels::form_factor::VisibilitySampling;
 pub use solver::MatrixSolver;

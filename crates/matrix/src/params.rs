@@ -2,7 +2,9 @@
 //! pairs (`--set iteration=conjugate-gradient`) or a TOML table through [`MethodParams`]; every error names
 //! the parameter.
 
-use radlab_scene::{MethodParams, Reconstruction, SolveError, form_factor::VisibilitySampling};
+use radlab_answer::Reconstruction;
+use radlab_kernels::form_factor::VisibilitySampling;
+use radlab_method::{MethodParams, SolveError};
 use serde::{Deserialize, Serialize};
 
 /// How the linear system (I − ρF) B = E is solved.
@@ -38,7 +40,7 @@ pub const MAX_QUADRATURE: u32 = 16;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MatrixParams {
-    /// Longest element edge in scene units. `None` (the default): `radlab_scene::default_element_size`,
+    /// Longest element edge in scene units. `None` (the default): `radlab_answer::default_element_size`,
     /// 1/20 of the scene's bounding-box diagonal (about 1,000 elements in the Cornell box).
     pub element_size: Option<f64>,
     /// The iterative solver. Default: Gauss–Seidel.
@@ -59,7 +61,7 @@ pub struct MatrixParams {
     /// Default 2048.
     pub memory_budget_mib: f64,
     /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
-    /// `final-gather` (see [`radlab_scene::reconstruction`]). Default [`DEFAULT_RECONSTRUCTION`].
+    /// `final-gather` (see [`radlab_answer::reconstruction`]). Default [`DEFAULT_RECONSTRUCTION`].
     pub reconstruction: Reconstruction,
 }
 

@@ -2,7 +2,7 @@
 //! ([`crate::assembly`]), then one iteration of the chosen method per step until the stopping rule of
 //! [`crate::linear_system`] is met. The solution is constant per element: B_i at every point of element i.
 //!
-//! Before assembly, each element's open fraction o_i ([`radlab_scene::open_fraction`]) is estimated (with
+//! Before assembly, each element's open fraction o_i ([`radlab_kernels::open_fraction`]) is estimated (with
 //! area-sampled visibility, the default; with `centre` or `unoccluded` visibility o_i = 1), and the
 //! system is solved on the effective areas A_i max(o_i, r_i) (r_i the assembled row sum Σ_j F'_ij): B_i is
 //! the radiosity of the element's open part, so an element straddling a contact (half under a floor covering)
@@ -10,11 +10,11 @@
 //! system is the plain one.
 
 use glam::DVec3;
-use radlab_scene::{
-    Accel, ElementMesh, FaceId, MethodParams, Reconstructor, Rgb, Scene, Solution, SolveError,
-    Solver, Stats, Step, default_element_size, gouraud::ElementValue,
-    open_fraction::open_fractions,
-};
+use radlab_answer::{ElementMesh, Reconstructor, default_element_size, gouraud::ElementValue};
+use radlab_kernels::open_fraction::open_fractions;
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
+use radlab_scene::{FaceId, Rgb, Scene};
+use radlab_visibility::Accel;
 
 use crate::assembly::{self, Assembly, PairSettings};
 use crate::conjugate_gradient::ConjugateGradient;

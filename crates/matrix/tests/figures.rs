@@ -6,7 +6,9 @@ mod common;
 use std::time::Instant;
 
 use radlab_matrix::{Iteration, MatrixParams, MatrixSolver, VisibilitySampling};
-use radlab_scene::{Accel, Rgb, Solver, Step, builtin};
+use radlab_method::{Solver, Step};
+use radlab_scene::{Rgb, builtin};
+use radlab_visibility::Accel;
 
 fn run(s: &mut MatrixSolver) {
     while s.step().expect("step") == Step::Continue {}

@@ -4,10 +4,12 @@
 
 mod common;
 
+use radlab_answer::Reconstruction;
+use radlab_kernels::form_factor;
 use radlab_matrix::{Iteration, MatrixParams, MatrixSolver, VisibilitySampling};
-use radlab_scene::{
-    Accel, Reconstruction, Rgb, Scene, SolveError, Solver, Step, builtin, form_factor,
-};
+use radlab_method::{SolveError, Solver, Step};
+use radlab_scene::{Rgb, Scene, builtin};
+use radlab_visibility::Accel;
 
 const METHODS: [Iteration; 3] = [
     Iteration::Jacobi,
@@ -540,7 +542,7 @@ fn final_gather_keeps_the_near_white_furnace_and_gouraud_matches_constant_there(
             },
         );
         let sol = s.solution();
-        for p in radlab_scene::evaluation_points(&scene, 40, 3) {
+        for p in radlab_method::evaluation_points(&scene, 40, 3) {
             let b = sol.radiosity_at(p.face, p.point);
             let rel = (b - Rgb::splat(exact)).abs().max_element() / exact;
             assert!(

@@ -26,11 +26,13 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use radlab_method::{Solver, evaluation_points};
 use radlab_pathtrace::{
     McMethod, McRadiosityParams, McRadiositySolver, PointEstimate, PointParams, SAMPLES_PER_CHUNK,
     SurfacePoint, estimate_points,
 };
-use radlab_scene::{Accel, Scene, Solver, builtin, evaluation_points};
+use radlab_scene::{Scene, builtin};
+use radlab_visibility::Accel;
 
 fn surface_points(scene: &Scene, count: usize) -> Vec<SurfacePoint> {
     evaluation_points(scene, count, 1)

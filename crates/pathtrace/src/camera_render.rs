@@ -8,7 +8,10 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use radlab_scene::{Accel, Camera, Image, MethodParams, Rgb, Scene, SolveError, sampling};
+use radlab_answer::Image;
+use radlab_method::{MethodParams, SolveError};
+use radlab_scene::{Camera, Rgb, Scene, sampling};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

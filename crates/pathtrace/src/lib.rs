@@ -54,7 +54,7 @@
 //! | `max_steps` | 100 | steps before `Converged` |
 //! | `method` | `random-walk` | `random-walk` (collision-shooting walks) or `stochastic-jacobi` |
 //! | `max_depth` | 100000 | cap on bounces (walks) or generations (Jacobi) |
-//! | `reconstruction` | `gouraud` | point answers: `constant`, `gouraud` or `final-gather` (radlab_scene::reconstruction) |
+//! | `reconstruction` | `gouraud` | point answers: `constant`, `gouraud` or `final-gather` (radlab_answer::reconstruction) |
 //!
 //! **Cost**: O(particles × 1/(1 − ρ̄)) rays, independent of the number of element pairs (no form factors);
 //! memory O(elements). **Does badly**: small or dimly lit elements receive few particles and stay noisy
@@ -95,4 +95,5 @@ pub use point_estimator::{
 pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver};
 
 #[doc(no_inline)]
-pub use radlab_scene::{Accel, Camera};
+pub use radlab_scene::Camera;
+pub use radlab_visibility::Accel;

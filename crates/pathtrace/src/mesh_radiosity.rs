@@ -13,7 +13,7 @@
 //! element that sees only a panel's back receives nothing, and light re-emitted from it is absorbed by that
 //! back, so every element crossed by such an edge would lose the sealed share of what it reflects (the
 //! light leaks of Baum, Mann, Smith & Winget 1991). As matrix and progressive radiosity do, the first step
-//! estimates each element's open fraction o_j ([`radlab_scene::open_fraction`]) and the solver solves the
+//! estimates each element's open fraction o_j ([`radlab_kernels::open_fraction`]) and the solver solves the
 //! open-area system, B_j the radiosity of the open part:
 //!
 //! o_j A_j B_j = o_j A_j E_j + ρ_j Σ_i A_i F_ij B_i,   B_j = E_j + ρ_j Φ_j / (o_j A_j),
@@ -39,13 +39,16 @@
 //! threads.
 
 use glam::DVec3;
+use radlab_answer::{
+    ElementMesh, Reconstruction, Reconstructor, default_element_size, gouraud::ElementValue,
+};
+use radlab_kernels::open_fraction::open_fractions;
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{
-    Accel, ElementMesh, FaceId, MethodParams, Reconstruction, Reconstructor, Rgb, Scene, Solution,
-    SolveError, Solver, Stats, Step, default_element_size,
-    gouraud::ElementValue,
-    open_fraction::open_fractions,
+    FaceId, Rgb, Scene,
     sampling::{self, Rng},
 };
+use radlab_visibility::Accel;
 use serde::{Deserialize, Serialize};
 
 use crate::discrete_distribution::Discrete;
@@ -172,7 +175,7 @@ pub(crate) struct Transport<'a> {
     /// Emitting elements, chosen with probability A_e Ē_e / Σ.
     pub sources: &'a Discrete,
     pub source_elements: &'a [usize],
-    /// Open fraction o_j of each element ([`radlab_scene::open_fraction`]): a particle leaving element j
+    /// Open fraction o_j of each element ([`radlab_kernels::open_fraction`]): a particle leaving element j
     /// carries the power of its open part divided by o_j (see the module documentation).
     pub open: &'a [f64],
     pub max_depth: u32,
@@ -351,7 +354,7 @@ impl<'a> McRadiositySolver<'a> {
         &self.solution.radiosity
     }
 
-    /// The open fraction o_j of each element ([`radlab_scene::open_fraction`]), estimated in the first step
+    /// The open fraction o_j of each element ([`radlab_kernels::open_fraction`]), estimated in the first step
     /// (all 1 before it): the element's power is o_j A_j B_j.
     pub fn open_fractions(&self) -> &[f64] {
         &self.solution.open

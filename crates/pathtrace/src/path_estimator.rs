@@ -23,9 +23,10 @@
 
 use glam::DVec3;
 use radlab_scene::{
-    Accel, FaceId, Rgb, Scene,
+    FaceId, Rgb, Scene,
     sampling::{self, Rng},
 };
+use radlab_visibility::Accel;
 use serde::{Deserialize, Serialize};
 
 use crate::emitter_sampling::EmitterSampler;

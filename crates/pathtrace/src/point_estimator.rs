@@ -10,7 +10,9 @@
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 use glam::DVec3;
-use radlab_scene::{Accel, FaceId, MethodParams, Rgb, Scene, SolveError, sampling};
+use radlab_method::{MethodParams, SolveError};
+use radlab_scene::{FaceId, Rgb, Scene, sampling};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -94,8 +96,8 @@ pub struct SurfacePoint {
     pub normal: DVec3,
 }
 
-impl From<&radlab_scene::EvalPoint> for SurfacePoint {
-    fn from(p: &radlab_scene::EvalPoint) -> Self {
+impl From<&radlab_method::EvalPoint> for SurfacePoint {
+    fn from(p: &radlab_method::EvalPoint) -> Self {
         Self {
             face: p.face,
             point: p.point,

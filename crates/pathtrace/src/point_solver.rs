@@ -19,10 +19,9 @@
 use std::collections::HashMap;
 
 use glam::DVec3;
-use radlab_scene::{
-    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
-    sampling::mix64,
-};
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
+use radlab_scene::{FaceId, Rgb, Scene, sampling::mix64};
+use radlab_visibility::Accel;
 use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};

@@ -14,8 +14,10 @@ mod common;
 
 use common::*;
 use radlab_matrix::{Iteration, MatrixParams, MatrixSolver, VisibilitySampling};
+use radlab_method::{Solver, Step};
 use radlab_pathtrace::*;
-use radlab_scene::{Accel, Rgb, Scene, Solver, Step};
+use radlab_scene::{Rgb, Scene};
+use radlab_visibility::Accel;
 
 const TOLERANCE: f64 = 1e-7;
 
@@ -107,7 +109,7 @@ fn point_estimates_agree_with_matrix_radiosity_face_by_face() {
     let coarse = matrix(&scene, &accel, 0.125, 4);
     let fine = matrix(&scene, &accel, 0.0625, 4);
     let face_average = |b: &[Rgb], h: f64| -> Vec<Rgb> {
-        let mesh = radlab_scene::ElementMesh::new(&scene, h);
+        let mesh = radlab_answer::ElementMesh::new(&scene, h);
         (0..scene.faces.len())
             .map(|f| {
                 let r = mesh.elements_of(f);

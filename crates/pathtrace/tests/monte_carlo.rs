@@ -7,11 +7,11 @@ mod common;
 
 use common::*;
 use glam::{DVec3, dvec3};
+use radlab_kernels::form_factor::point_polygon;
+use radlab_method::{MethodParams, Solver, Step, evaluation_points};
 use radlab_pathtrace::*;
-use radlab_scene::{
-    Accel, Camera, Material, MethodParams, Rgb, SceneBuilder, Solver, Step, builtin,
-    evaluation_points, form_factor::point_polygon,
-};
+use radlab_scene::{Camera, Material, Rgb, SceneBuilder, builtin};
+use radlab_visibility::Accel;
 
 fn params(samples: u32, direct: DirectSampling) -> PointParams {
     PointParams {

@@ -1,5 +1,5 @@
 //! Mesh Monte Carlo radiosity across sealed contacts (a panel 1 mm in front of a wall, as floor coverings
-//! and ceiling lamps are modelled): the open shares o_j of `radlab_scene::open_fraction` make the solver
+//! and ceiling lamps are modelled): the open shares o_j of `radlab_kernels::open_fraction` make the solver
 //! solve the open-area system o_j A_j B_j = o_j A_j E_j + ρ_j Σ_i A_i F_ij B_i (F_ij sampled from all of
 //! element i), as matrix radiosity does, instead of losing the light its elements' sealed parts send into
 //! the panel's back (the light leaks of Baum, Mann, Smith & Winget 1991).
@@ -15,11 +15,11 @@ mod common;
 
 use common::{mc_params, mean_se, on_threads, step_values};
 use glam::{DVec3, dvec3};
+use radlab_method::{Solver, Step};
 use radlab_pathtrace::*;
-use radlab_scene::{
-    Accel, Rgb, Scene, SceneBuilder, Solver, Step,
-    test_scenes::{add_box, material},
-};
+use radlab_scene::{Rgb, Scene, SceneBuilder};
+use radlab_testkit::{add_box, material};
+use radlab_visibility::Accel;
 
 /// Side of the box (m), gap between the panel and the floor (m), element size (m).
 const SIDE: f64 = 5.0;

@@ -22,14 +22,14 @@
 
 use std::time::{Duration, Instant};
 
+use radlab_answer::default_element_size;
+use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_matrix::{MatrixParams, MatrixSolver};
+use radlab_method::{EvalPoint, Solution, Solver, Step, error_metric, evaluation_points};
 use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
 use radlab_progressive::{Overshoot, ProgressiveParams, ProgressiveSolver};
-use radlab_scene::form_factor::VisibilitySampling;
-use radlab_scene::{
-    Accel, EvalPoint, Rgb, Scene, Solution, Solver, Step, builtin, default_element_size,
-    error_metric, evaluation_points,
-};
+use radlab_scene::{Rgb, Scene, builtin};
+use radlab_visibility::Accel;
 
 struct Reference {
     points: Vec<EvalPoint>,
@@ -68,7 +68,7 @@ fn reference(scene: &Scene, accel: &Accel, count: usize, samples: u32) -> Refere
     }
 }
 
-/// Relative L1 error of B against the reference (radlab_scene::error_metric).
+/// Relative L1 error of B against the reference (radlab_method::error_metric).
 fn error(sol: &dyn Solution, r: &Reference) -> f64 {
     error_metric::solution_errors(sol, &r.points, &r.mean).l1
 }

@@ -17,12 +17,12 @@
 )]
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use radlab_answer::default_element_size;
 use radlab_matrix::{MatrixParams, MatrixSolver};
+use radlab_method::{Solution, Solver, Step, error_metric, evaluation_points};
 use radlab_progressive::{ProgressiveParams, ProgressiveSolver, StopReason};
-use radlab_scene::{
-    Accel, Scene, Solution, Solver, Step, builtin, default_element_size, error_metric,
-    evaluation_points,
-};
+use radlab_scene::{Scene, builtin};
+use radlab_visibility::Accel;
 
 fn run<'a>(scene: &'a Scene, accel: &'a Accel, params: ProgressiveParams) -> ProgressiveSolver<'a> {
     let mut s = ProgressiveSolver::new(scene, accel, params, 1).expect("solver");
@@ -30,7 +30,7 @@ fn run<'a>(scene: &'a Scene, accel: &'a Accel, params: ProgressiveParams) -> Pro
     s
 }
 
-/// Relative L1 difference (radlab_scene::error_metric) of `a` from `b` at 2,000 of the scene's evaluation
+/// Relative L1 difference (radlab_method::error_metric) of `a` from `b` at 2,000 of the scene's evaluation
 /// points.
 fn difference(scene: &Scene, a: &dyn Solution, b: &dyn Solution) -> f64 {
     error_metric::difference(a, b, &evaluation_points(scene, 2000, 1)).l1

@@ -20,7 +20,9 @@
 //! reached.
 
 use glam::DVec3;
-use radlab_scene::{Accel, Rgb, Scene, SolveError};
+use radlab_method::SolveError;
+use radlab_scene::{Rgb, Scene};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 use crate::element_location::ElementLocator;
@@ -147,7 +149,7 @@ pub(crate) struct Refinement {
     pub min_element_size: f64,
     /// Most elements the arena may hold.
     pub max_elements: usize,
-    /// Whether new elements get their own open share ([`radlab_scene::open_fraction`]); otherwise they keep
+    /// Whether new elements get their own open share ([`radlab_kernels::open_fraction`]); otherwise they keep
     /// their parent's.
     pub estimate_open: bool,
 }

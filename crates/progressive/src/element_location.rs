@@ -1,15 +1,16 @@
 //! Point location among the elements of a face: progressive radiosity's mesh (top-level elements per face,
 //! each the root of a quadtree of [`radlab_scene::Polygon::split4`] children) seen as an
-//! [`radlab_scene::ElementTree`], so the shared [`radlab_scene::ElementLocator`] finds the leaf containing a
+//! [`radlab_answer::ElementTree`], so the shared [`radlab_answer::ElementLocator`] finds the leaf containing a
 //! surface point in O(1 + depth).
 
 use std::ops::Range;
 
-use radlab_scene::{ElementTree, FaceId, Polygon};
+use radlab_answer::ElementTree;
+use radlab_scene::{FaceId, Polygon};
 
 use crate::substructuring::Mesh;
 
-pub(crate) use radlab_scene::ElementLocator;
+pub(crate) use radlab_answer::ElementLocator;
 
 impl ElementTree for Mesh {
     fn roots(&self, face: FaceId) -> Range<u32> {

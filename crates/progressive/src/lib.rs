@@ -51,7 +51,7 @@
 //! | `overshoot` | `ambient` | `none` (plain Southwell shooting) or `ambient` (overshooting, see above) |
 //! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (see below) |
 //!
-//! **Point answers** (`reconstruction`, radlab_scene::reconstruction): `constant` is the element's value (plus the
+//! **Point answers** (`reconstruction`, radlab_answer::reconstruction): `constant` is the element's value (plus the
 //! ambient term when on); `gouraud` interpolates vertex values over each face's leaf elements, anchoring the
 //! T-vertices adaptive subdivision creates so the field stays continuous; `final-gather` recomputes
 //! B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j from every leaf element (Lischinski, Tampieri & Greenberg 1993). The data is rebuilt at the

@@ -1,12 +1,14 @@
 //! Parameters of progressive radiosity, their documented defaults and range checks.
 //!
 //! Every length is in scene units and every default is relative to the scene's bounding-box diagonal
-//! (through [`radlab_scene::default_element_size`]), so the same defaults mesh a 1 mm box and a 100 m hall
+//! (through [`radlab_answer::default_element_size`]), so the same defaults mesh a 1 mm box and a 100 m hall
 //! alike. The adaptive threshold is a relative radiosity contrast and the stopping rule a fraction of the
 //! emitted power, so neither depends on the scene's scale or on its light's strength.
 
-use radlab_scene::form_factor::VisibilitySampling;
-use radlab_scene::{MethodParams, Reconstruction, Scene, SolveError, default_element_size};
+use radlab_answer::{Reconstruction, default_element_size};
+use radlab_kernels::form_factor::VisibilitySampling;
+use radlab_method::{MethodParams, SolveError};
+use radlab_scene::Scene;
 use serde::{Deserialize, Serialize};
 
 /// Default shooting patch size as a multiple of the element size: each patch shoots from about 2 × 2 elements.
@@ -75,7 +77,7 @@ pub struct ProgressiveParams {
     /// far fewer shots at high reflectance (see the crate documentation for measurements).
     pub overshoot: Overshoot,
     /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
-    /// `final-gather` (radlab_scene::reconstruction). Default [`DEFAULT_RECONSTRUCTION`].
+    /// `final-gather` (radlab_answer::reconstruction). Default [`DEFAULT_RECONSTRUCTION`].
     pub reconstruction: Reconstruction,
 }
 

@@ -11,7 +11,7 @@
 //! nothing is sealed)
 //! where F_{e→j} is the mean over m × m receiver points of the exact unoccluded point-to-polygon factor toward
 //! the shooting patch, times a visibility fraction from rays between the two
-//! ([`radlab_scene::form_factor::polygon_polygon`], the same kernel the matrix method uses). The ray count
+//! ([`radlab_kernels::form_factor::polygon_polygon`], the same kernel the matrix method uses). The ray count
 //! depends on the shooter only: `visibility` toward patches that emit (direct light casts the sharp shadows),
 //! `indirect_visibility` toward the rest. F is evaluated
 //! from the receiver's points, so the answer is exact for unoccluded point receivers and the n² matrix is never
@@ -44,10 +44,11 @@
 //! Power is compared across channels by each channel's share of that channel's emitted power, Σ_c A |ΔB_c| /
 //! Φ_c, so a dim channel is not ignored; the unshot fraction is the worst channel's Σ_p A_p |ΔB_p,c| / Φ_c.
 
-use radlab_scene::form_factor::{
+use radlab_kernels::form_factor::{
     VisibilitySampling, polygon_polygon_unoccluded, visibility_fraction,
 };
-use radlab_scene::{Accel, Rgb, Scene, facing_away};
+use radlab_scene::{Rgb, Scene, facing_away};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 use crate::substructuring::{Element, Mesh, Patch};

@@ -1,6 +1,6 @@
 //! The progressive radiosity solver (Cohen, Chen, Wallace & Greenberg 1988): Southwell shooting over a
 //! substructured mesh (Cohen et al. 1986) with adaptive subdivision and the ambient term, driven one step at a
-//! time through [`radlab_scene::Solver`].
+//! time through [`radlab_method::Solver`].
 //!
 //! A step shoots `shots_per_step` patches one after another (each the one with the largest unshot power at the
 //! time, [`crate::shooting`]), then, if adaptive subdivision is on, splits elements across large contrasts
@@ -12,11 +12,11 @@
 use glam::DVec3;
 use std::sync::OnceLock;
 
-use radlab_scene::gouraud::ElementValue;
-use radlab_scene::{
-    Accel, FaceId, Polygon, Reconstruction, Reconstructor, Rgb, Scene, Solution, SolveError,
-    Solver, Stats, Step,
-};
+use radlab_answer::gouraud::ElementValue;
+use radlab_answer::{Reconstruction, Reconstructor};
+use radlab_method::{Solution, SolveError, Solver, Stats, Step};
+use radlab_scene::{FaceId, Polygon, Rgb, Scene};
+use radlab_visibility::Accel;
 
 use crate::adaptive_subdivision::{self, Refinement};
 use crate::ambient;
@@ -57,7 +57,7 @@ pub struct ElementView {
     pub area: f64,
     /// Radiosity (W/m²) of its open part, without the ambient term.
     pub radiosity: Rgb,
-    /// Its open share ([`radlab_scene::open_fraction`]; 1 unless estimated): the element's power is
+    /// Its open share ([`radlab_kernels::open_fraction`]; 1 unless estimated): the element's power is
     /// `open · area · radiosity`.
     pub open: f64,
 }
@@ -280,7 +280,7 @@ impl<'a> ProgressiveSolver<'a> {
         &self.params
     }
 
-    /// Whether elements carry open shares ([`radlab_scene::open_fraction`]): only where both visibility
+    /// Whether elements carry open shares ([`radlab_kernels::open_fraction`]): only where both visibility
     /// estimates sample the receiver's area does its sealed share enter the form factors; otherwise every open
     /// share stays 1.
     fn open_shares_apply(&self) -> bool {

@@ -11,12 +11,15 @@
 //! and the radiosity it shoots is its unshot part ΔB_p. Each patch keeps the invariant B_p = S_p + ΔB_p, where
 //! S_p is the total radiosity it has shot so far; that total is what elements created later re-gather from.
 //!
-//! Radiosities are those of the open parts ([`radlab_scene::open_fraction`]): an element with open share o_e
+//! Radiosities are those of the open parts ([`radlab_kernels::open_fraction`]): an element with open share o_e
 //! holds B_e over o_e A_e, and the means above are taken over the open areas, B_p = Σ_e o_e A_e B_e / Σ_e o_e
 //! A_e, so an element half under a floor covering neither absorbs nor sends the light its sealed half cannot
 //! receive. Where nothing is sealed every o_e is 1 and these are the plain area means.
 
-use radlab_scene::{Accel, Polygon, Rgb, Scene, SolveError, open_fraction::open_fractions};
+use radlab_kernels::open_fraction::open_fractions;
+use radlab_method::SolveError;
+use radlab_scene::{Polygon, Rgb, Scene};
+use radlab_visibility::Accel;
 
 /// A shooting patch.
 #[derive(Clone, Copy, Debug)]
@@ -317,7 +320,7 @@ mod tests {
         }
         // patch_size == element_size: one element per patch, identical to the scene's ElementMesh.
         let m = Mesh::new(&scene, 0.25, 0.25, 1e9).expect("mesh");
-        let reference = radlab_scene::ElementMesh::new(&scene, 0.25);
+        let reference = radlab_answer::ElementMesh::new(&scene, 0.25);
         assert_eq!(m.elements.len(), reference.len());
         for (a, b) in m.elements.iter().zip(&reference.elements) {
             assert_eq!(a.polygon, b.polygon);

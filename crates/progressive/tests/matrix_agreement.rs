@@ -10,10 +10,12 @@
 //! the quadrature. Visibility is the same deterministic kernel in both: unoccluded in a convex room, one
 //! centre-to-centre ray in a room with a block.
 
+use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_matrix::{Iteration, MatrixParams, MatrixSolver};
+use radlab_method::{Solver, Step};
 use radlab_progressive::{ProgressiveParams, ProgressiveSolver};
-use radlab_scene::form_factor::VisibilitySampling;
-use radlab_scene::{Accel, Rgb, Scene, Solver, Step};
+use radlab_scene::{Rgb, Scene};
+use radlab_visibility::Accel;
 
 mod common;
 

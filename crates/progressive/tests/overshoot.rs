@@ -9,9 +9,11 @@
 //! signs of r; the stopping rule ‖r‖ ≤ f Φ (per channel) then gives ‖B* − B‖ ≤ ρ_max f Φ/(1 − ρ_max), and in a
 //! furnace, where ‖B*‖ = Φ/(1 − ρ), a relative L1 error of at most ρ f.
 
+use radlab_kernels::form_factor::VisibilitySampling;
+use radlab_method::{Solver, Step};
 use radlab_progressive::{Overshoot, ProgressiveParams, ProgressiveSolver, StopReason};
-use radlab_scene::form_factor::VisibilitySampling;
-use radlab_scene::{Accel, Rgb, Scene, Solver, Step, builtin};
+use radlab_scene::{Rgb, Scene, builtin};
+use radlab_visibility::Accel;
 
 mod common;
 use common::closed_room;

@@ -3,12 +3,13 @@
 //! the same mesh, and the structural promises (monotone unshot power, determinism, scale invariance, adaptive
 //! subdivision where the light changes and nowhere else).
 
+use radlab_answer::Reconstruction;
+use radlab_kernels::form_factor::VisibilitySampling;
+use radlab_method::{Solver, Step};
 use radlab_progressive::{Overshoot, ProgressiveParams, ProgressiveSolver};
-use radlab_scene::form_factor::VisibilitySampling;
 use radlab_scene::glam::{DVec3, dvec3};
-use radlab_scene::{
-    Accel, Material, Reconstruction, Rgb, Scene, SceneBuilder, Solver, Step, builtin,
-};
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder, builtin};
+use radlab_visibility::Accel;
 
 mod common;
 use common::closed_room;
@@ -611,7 +612,7 @@ fn final_gather_is_exact_for_direct_light_anywhere_and_gouraud_is_continuous() {
             let b = s.solution().radiosity_at(receiver, p);
             let exact = rho
                 * e
-                * radlab_scene::form_factor::point_polygon(
+                * radlab_kernels::form_factor::point_polygon(
                     p,
                     scene.faces[receiver].normal,
                     &scene.polygon(emitter),

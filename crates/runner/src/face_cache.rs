@@ -13,7 +13,9 @@ use radlab_face_cluster::{
     FaceClusterParams, FaceClusterSolveParams, FaceClusterSolver, FaceClusterTree, digest,
     digest_hex,
 };
-use radlab_scene::{Accel, MethodParams, Scene, SolveError, Solver};
+use radlab_method::{MethodParams, SolveError, Solver};
+use radlab_scene::Scene;
+use radlab_visibility::Accel;
 
 /// Where the hierarchy of `scene` built with `params` is cached under `dir`.
 pub fn cache_path(dir: &Path, scene: &Scene, params: &FaceClusterParams) -> PathBuf {

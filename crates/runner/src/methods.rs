@@ -1,7 +1,9 @@
 //! The method registry: every solver radlab can run, by name, with its parameters and defaults. A new solver
 //! crate plugs in here with one entry; nothing else in the runner changes.
 
-use radlab_scene::{Accel, EvalPoint, MethodParams, Scene, SolveError, Solver};
+use radlab_method::{EvalPoint, MethodParams, SolveError, Solver};
+use radlab_scene::Scene;
+use radlab_visibility::Accel;
 
 /// Builds a solver from the scene, its accelerator, a parameter table, a seed and the points it will be asked
 /// about. Only methods that answer per point (path tracing) use the points: they trace there in their steps.

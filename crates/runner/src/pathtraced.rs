@@ -3,8 +3,11 @@
 //! doubling the paths per step) is [`radlab_pathtrace::PathTraceSolver`].
 
 use anyhow::Result;
+use radlab_answer::Image;
+use radlab_method::MethodParams;
 use radlab_pathtrace::{PathTraceParams, RenderParams};
-use radlab_scene::{Accel, Camera, Image, MethodParams, Scene};
+use radlab_scene::{Camera, Scene};
+use radlab_visibility::Accel;
 
 use crate::methods::{ParamLine, param_lines};
 use crate::progress;

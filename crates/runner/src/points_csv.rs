@@ -8,7 +8,8 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use glam::DVec3;
-use radlab_scene::{Accel, FaceId, Scene};
+use radlab_scene::{FaceId, Scene};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 /// How far (relative to the scene's bounding diagonal) a probe point may lie from the surface it is matched to.

@@ -4,7 +4,7 @@
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
-use radlab_scene::{Solver, Stats, Step};
+use radlab_method::{Solver, Stats, Step};
 
 /// Limits on a solve.
 #[derive(Clone, Copy, Debug)]

@@ -38,14 +38,13 @@
 
 use std::fmt::Write as _;
 
+use radlab_kernels::form_factor::point_polygon;
+use radlab_method::{EvalPoint, Solver, Step, evaluation_points};
 use radlab_runner::methods::{MethodInfo, methods};
-use radlab_scene::form_factor::point_polygon;
 use radlab_scene::glam::{DVec3, dvec3};
-use radlab_scene::test_scenes::{add_box, box_sides, grid, hollow_box, material, room, scaled};
-use radlab_scene::{
-    Accel, EvalPoint, FaceId, Material, Rgb, Scene, SceneBuilder, Solver, Step, builtin,
-    evaluation_points,
-};
+use radlab_scene::{FaceId, Material, Rgb, Scene, SceneBuilder, builtin};
+use radlab_testkit::{add_box, box_sides, grid, hollow_box, material, room, scaled};
+use radlab_visibility::Accel;
 
 /// Safety cap on steps per run (a method that has not converged by then fails the case, saying so).
 const MAX_STEPS: usize = 200_000;
@@ -412,7 +411,7 @@ impl Report {
             Some(x) => {
                 let mut p = params.clone();
                 for (k, v) in x.overrides {
-                    p.insert((*k).to_string(), radlab_scene::params::parse_value(v));
+                    p.insert((*k).to_string(), radlab_method::params::parse_value(v));
                 }
                 let o = outcome(&p);
                 let holds = match x.expect {

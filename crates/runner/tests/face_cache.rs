@@ -1,9 +1,11 @@
 //! The face-cluster hierarchy cache: a second run reads the hierarchy the first wrote and gives bit-identical
 //! radiosity; a damaged cache file is an error naming the file and the fix.
 
+use radlab_method::Step;
 use radlab_runner::face_cache::{CacheOutcome, load_or_build};
 use radlab_runner::methods;
-use radlab_scene::{Accel, Step, builtin};
+use radlab_scene::builtin;
+use radlab_visibility::Accel;
 
 fn radiosity(scene: &radlab_scene::Scene, dir: &str) -> Vec<[u64; 3]> {
     let accel = Accel::new(scene);

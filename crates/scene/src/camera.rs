@@ -1,13 +1,10 @@
-//! A pinhole camera and primary-ray rendering of any [`Solution`]: each pixel shows the radiance
-//! L = B/π (W/m²/sr) of the first surface its ray hits (a diffuse surface's radiance is its radiosity over π),
-//! averaged over jittered sub-pixel samples. Surfaces are one-sided: a face seen from behind is black, as in the
-//! path tracer. Rows are rendered in parallel; sample positions derive from
-//! (seed, pixel), so the image does not depend on the thread count.
+//! A pinhole camera: the ray through image position (x, y) leaves the eye along
+//! w + (2x/width − 1) tan(fov_y/2) (width/height) u + (1 − 2y/height) tan(fov_y/2) v, normalised (u, v, w the
+//! camera's orthonormal frame; x right, y down, in pixels). Rendering through it is `radlab_answer::render_solution`.
 
 use glam::DVec3;
-use rayon::prelude::*;
 
-use crate::{Accel, Ray, Rgb, Scene, Solution, sampling};
+use crate::Ray;
 
 /// A pinhole camera.
 #[derive(Clone, Debug, PartialEq)]
@@ -105,76 +102,5 @@ impl CameraFrame {
         let sx = (2.0 * x / self.width - 1.0) * self.half_w;
         let sy = (1.0 - 2.0 * y / self.height) * self.half_h;
         Ray::new(self.eye, (self.w + sx * self.u + sy * self.v).normalize())
-    }
-}
-
-/// A linear RGB image, row-major, top row first.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Pixels, row-major.
-    pub pixels: Vec<Rgb>,
-}
-
-impl Image {
-    /// The pixel at column x, row y.
-    pub fn get(&self, x: u32, y: u32) -> Rgb {
-        self.pixels[(y * self.width + x) as usize]
-    }
-}
-
-/// Renders the radiance B/π of `solution` seen through `camera`, `spp` jittered samples per pixel
-/// (1 = pixel centres). Rays that escape the scene are black. `progress(pixels_done, pixels_total)` is
-/// called from worker threads after each row: with a final gather every sample is a gather, so an image
-/// can take minutes.
-pub fn render_solution(
-    scene: &Scene,
-    accel: &Accel,
-    camera: &Camera,
-    solution: &dyn Solution,
-    spp: u32,
-    seed: u64,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Image {
-    let (w, h) = (camera.width, camera.height);
-    let spp = spp.max(1);
-    let total = (w * h) as usize;
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let mut pixels = vec![Rgb::ZERO; total];
-    pixels
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (x, px) in row.iter_mut().enumerate() {
-                let mut sum = Rgb::ZERO;
-                let mut r = sampling::rng(seed, (y as u64) * w as u64 + x as u64);
-                for s in 0..spp {
-                    let (jx, jy) = if spp == 1 && s == 0 {
-                        (0.5, 0.5)
-                    } else {
-                        (sampling::uniform(&mut r), sampling::uniform(&mut r))
-                    };
-                    let ray = camera.ray(x as f64 + jx, y as f64 + jy);
-                    if let Some(hit) = accel.intersect(&ray)
-                        && scene.faces[hit.face].normal.dot(ray.dir) < 0.0
-                    {
-                        sum += solution.radiosity_at(hit.face, hit.point) / std::f64::consts::PI;
-                    }
-                }
-                *px = sum / spp as f64;
-            }
-            let n = row.len();
-            progress(
-                done.fetch_add(n, std::sync::atomic::Ordering::AcqRel) + n,
-                total,
-            );
-        });
-    Image {
-        width: w,
-        height: h,
-        pixels,
     }
 }

@@ -6,7 +6,10 @@
 //!
 //! Usage: `cargo run --release -p radlab-volume-cluster --example row_sums -- K R TRANSFER [key=value ...]`
 
-use radlab_scene::{Accel, MethodParams, Reconstruction, Solver, Step, builtin};
+use radlab_answer::Reconstruction;
+use radlab_method::{MethodParams, Solver, Step};
+use radlab_scene::builtin;
+use radlab_visibility::Accel;
 use radlab_volume_cluster::{ClusterSolver, TransferMode, VolumeClusterParams};
 
 fn report<M: TransferMode>(

@@ -25,11 +25,9 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{Link, NodeKind, link_stream};
-use radlab_scene::{
-    Accel, FaceId, PACKET_SEGMENTS, Segment,
-    form_factor::{VisibilitySampling, pair_kernel},
-    sampling,
-};
+use radlab_kernels::form_factor::{VisibilitySampling, pair_kernel};
+use radlab_scene::{FaceId, sampling};
+use radlab_visibility::{Accel, PACKET_SEGMENTS, Segment};
 
 use crate::cluster_node::ClusterNode;
 

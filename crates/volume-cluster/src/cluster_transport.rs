@@ -19,10 +19,9 @@ use glam::DVec3;
 use radlab_hierarchical::{
     GatherAt, LinearState, Link, NodeKind, NodeView, PatchKernel, Transport,
 };
-use radlab_scene::{
-    Accel, Rgb,
-    form_factor::{VisibilitySampling, receiver_points},
-};
+use radlab_kernels::form_factor::{VisibilitySampling, receiver_points};
+use radlab_scene::Rgb;
+use radlab_visibility::Accel;
 
 use crate::cluster_link::{centroid_geometry, cluster_link};
 use crate::cluster_node::ClusterNode;

@@ -23,7 +23,8 @@
 //! escapes detection with probability about (1 − p)^(16 k); an undetected one is so small that rescaling
 //! its rows to one errs by about p.
 
-use radlab_scene::{Accel, FaceId, Scene, sampling};
+use radlab_scene::{FaceId, Scene, sampling};
+use radlab_visibility::Accel;
 use rayon::prelude::*;
 
 /// Rays cast from each face to find its region.

@@ -4,7 +4,7 @@
 //! patches.
 
 use radlab_hierarchical::{ErrorNorm, HierarchicalParams};
-use radlab_scene::{MethodParams, SolveError};
+use radlab_method::{MethodParams, SolveError};
 use serde::{Deserialize, Serialize};
 
 /// How light crosses a link with a cluster end.

@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use radlab_hierarchical::{Engine, NodeKind, PatchKernel, SurfaceOutput};
-use radlab_scene::{
-    Accel, FaceId, MethodParams, Rgb, Scene, Solution, SolveError, Solver, Stats, Step,
-};
+use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
+use radlab_scene::{FaceId, Rgb, Scene};
+use radlab_visibility::Accel;
 
 use crate::cluster_node::ClusterNode;
 use crate::cluster_transport::{ClusterTransport, TransferMode};

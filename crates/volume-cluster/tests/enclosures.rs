@@ -5,8 +5,10 @@
 //! checks the reachability test ([`radlab_volume_cluster::enclosure`]) and its use by every transfer.
 
 use glam::dvec3;
-use radlab_scene::test_scenes::{hollow_box, room};
-use radlab_scene::{Accel, Rgb, Scene, Solver, Step};
+use radlab_method::{Solver, Step};
+use radlab_scene::{Rgb, Scene};
+use radlab_testkit::{hollow_box, room};
+use radlab_visibility::Accel;
 use radlab_volume_cluster::{Transfer, VolumeClusterParams, VolumeClusterSolver, enclosure};
 
 /// Boxes flush against the x = 0 wall and the floor, and in the corner x = y = 1 on the floor.

@@ -11,7 +11,8 @@
 //! which is why this test runs at the default, without it.)
 
 use glam::{DVec3, dvec3};
-use radlab_scene::{Material, Rgb, SceneBuilder, Solver, Step};
+use radlab_method::{Solver, Step};
+use radlab_scene::{Material, Rgb, SceneBuilder};
 use radlab_volume_cluster::{VolumeClusterParams, VolumeClusterSolver};
 
 #[test]
@@ -72,11 +73,11 @@ fn a_sliver_in_a_furnace_gets_e_over_one_minus_rho() {
         let c = scene.faces[f].centroid;
         assert!(n.dot(DVec3::splat(0.5) - c) > 0.0, "face {f} faces out");
     }
-    let accel = radlab_scene::Accel::new(&scene);
+    let accel = radlab_visibility::Accel::new(&scene);
     // The element's own value, not a final gather's (which re-gathers with exact point-to-polygon factors
     // from the walls' B ≈ 10 and would hide the sliver's row).
     let mut params = VolumeClusterParams::default();
-    params.engine.reconstruction = radlab_scene::Reconstruction::Constant;
+    params.engine.reconstruction = radlab_answer::Reconstruction::Constant;
     let mut s = VolumeClusterSolver::new(&scene, &accel, params, 1).expect("solver");
     let mut converged = false;
     for _ in 0..10_000 {

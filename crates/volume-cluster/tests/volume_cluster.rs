@@ -6,12 +6,12 @@
 use std::sync::Arc;
 
 use glam::{DVec3, dvec3};
+use radlab_answer::Reconstruction;
 use radlab_hierarchical::{HierarchicalParams, HierarchicalSolver, NodeKind, Patch, Schedule};
-use radlab_scene::form_factor::{VisibilitySampling, point_polygon};
-use radlab_scene::{
-    Accel, Material, Reconstruction, Rgb, Scene, SceneBuilder, Solution, Solver, Step, builtin,
-    sampling,
-};
+use radlab_kernels::form_factor::{VisibilitySampling, point_polygon};
+use radlab_method::{Solution, Solver, Step};
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder, builtin, sampling};
+use radlab_visibility::Accel;
 use radlab_volume_cluster::normal_cone::{NormalCone, Side};
 use radlab_volume_cluster::{
     Alpha, ClusterNode, ClusterSolver, ClusterTree, Directional, Isotropic, RowNormalisation,

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use radlab_face_cluster::{FaceClusterSolveParams, FaceClusterSolver};
-use radlab_scene::{MethodParams, SolveError, Solver, Step};
+use radlab_method::{MethodParams, SolveError, Solver, Step};
 
 /// The parameters `pairs` give (values as in experiment files), or the error they raise.
 pub fn try_params(pairs: &[(&str, &str)]) -> Result<FaceClusterSolveParams, SolveError> {

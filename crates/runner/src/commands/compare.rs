@@ -1,6 +1,6 @@
 //! `radlab compare A.points.csv B.points.csv …`: which of two runs is closer to the reference, and by more than
 //! the evaluation points can tell. Each run's answers at the evaluation points (`runs/<id>.points.csv` of
-//! `radlab run`) are measured with the runner's relative L1 (`radlab_scene::error_metric`; the points carry
+//! `radlab run`) are measured with the runner's relative L1 (`radlab_method::error_metric`; the points carry
 //! equal area weights), and every pair's difference L1(A) − L1(B) gets a 95% percentile bootstrap interval
 //! over the points (Efron & Tibshirani 1993, ch. 13): the points are resampled with replacement, the same
 //! resamples for every run, so the interval is that of the paired difference, in which what the runs share
@@ -15,7 +15,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use radlab_scene::{Rgb, error_metric, sampling};
+use radlab_method::error_metric;
+use radlab_scene::{Rgb, sampling};
 
 use crate::experiment::execute::PointRow;
 

@@ -7,8 +7,9 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Result;
+use radlab_method::{EvalPoint, MethodParams};
 use radlab_pathtrace::{PathTraceParams, PathTraceSolver, SurfacePoint};
-use radlab_scene::{EvalPoint, MethodParams, Rgb};
+use radlab_scene::Rgb;
 
 use super::solve::{MethodArgs, load, solve};
 use crate::{pathtraced, points_csv, progress, solve_loop};

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::Result;
-use radlab_scene::{Accel, EvalPoint, Scene, Solution, Solver, params};
+use radlab_method::{EvalPoint, Solution, Solver, params};
+use radlab_scene::Scene;
+use radlab_visibility::Accel;
 
 use crate::output::{exr_image, faces_csv, ply_radiosity};
 use crate::solve_loop::{self, Limits, Outcome, StepRecord};
@@ -108,12 +110,12 @@ pub fn solve<'a>(
 pub fn render_image(
     loaded: &Loaded,
     camera: &radlab_scene::Camera,
-    solution: &dyn radlab_scene::Solution,
+    solution: &dyn radlab_method::Solution,
     spp: u32,
     seed: u64,
-) -> radlab_scene::Image {
+) -> radlab_answer::Image {
     let bar = progress::bar(u64::from(camera.width * camera.height), "image");
-    let image = radlab_scene::render_solution(
+    let image = radlab_answer::render_solution(
         &loaded.scene,
         &loaded.accel,
         camera,
@@ -164,7 +166,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     let means = faces_csv::face_means(scene, solution);
     faces_csv::write_faces_csv(&out.join("faces.csv"), scene, &means)?;
     let piece = if scene.faces.len() < 100_000 {
-        0.5 * radlab_scene::default_element_size(scene)
+        0.5 * radlab_answer::default_element_size(scene)
     } else {
         f64::INFINITY
     };

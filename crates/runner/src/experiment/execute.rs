@@ -10,7 +10,9 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use radlab_scene::{Accel, EvalPoint, MethodParams, Rgb, Solver};
+use radlab_method::{EvalPoint, MethodParams, Solver};
+use radlab_scene::Rgb;
+use radlab_visibility::Accel;
 use serde::{Deserialize, Serialize};
 
 use super::config::{Evaluation, LimitsConfig, OutputsConfig, ReferenceKind, RunSpec};
@@ -384,7 +386,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let scene = crate::scene_spec::load(&spec.scene)?;
     let accel = Accel::new(&scene);
     let points =
-        radlab_scene::evaluation_points(&scene, job.evaluation.points, job.evaluation.seed);
+        radlab_method::evaluation_points(&scene, job.evaluation.points, job.evaluation.seed);
     let (reference, std_error) = reference::read_cache(&job.reference_file, points.len())?;
     let weights: Vec<f64> = points.iter().map(|p| p.weight).collect();
     let method = crate::methods::find(&spec.method)?;
@@ -503,7 +505,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             };
             radlab_pathtrace::render(&scene, &accel, &camera, &render, spec.seed, &|_, _| {}).0
         } else {
-            radlab_scene::render_solution(
+            radlab_answer::render_solution(
                 &scene,
                 &accel,
                 &camera,

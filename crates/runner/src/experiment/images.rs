@@ -8,7 +8,8 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
-use radlab_scene::{Camera, Image, Rgb, Scene};
+use radlab_answer::Image;
+use radlab_scene::{Camera, Rgb, Scene};
 
 use super::config::OutputsConfig;
 use crate::output::atomic::write_via_temp;

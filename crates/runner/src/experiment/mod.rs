@@ -11,7 +11,7 @@ pub mod config;
 pub mod digest;
 pub mod execute;
 pub mod images;
-pub use radlab_scene::error_metric as metrics;
+pub use radlab_method::error_metric as metrics;
 pub mod plots;
 pub mod reference;
 pub mod report;
@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
 use anyhow::{Context, Result, bail};
-use radlab_scene::Accel;
+use radlab_visibility::Accel;
 
 use crate::output::atomic::write_bytes;
 use crate::output::exr_image::{read_exr, write_exr};
@@ -131,7 +131,7 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
         let scene_digest = digest::scene(&scene);
         let accel = Accel::new(&scene);
         let points =
-            radlab_scene::evaluation_points(&scene, cfg.evaluation.points, cfg.evaluation.seed);
+            radlab_method::evaluation_points(&scene, cfg.evaluation.points, cfg.evaluation.seed);
         if points.is_empty() {
             bail!("scene '{label}' has no non-emitting surface to evaluate");
         }

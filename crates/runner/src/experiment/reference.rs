@@ -11,7 +11,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use radlab_scene::{Accel, EvalPoint, FaceId, Rgb, Scene, Segment, form_factor, sampling};
+use radlab_kernels::form_factor;
+use radlab_method::EvalPoint;
+use radlab_scene::{FaceId, Rgb, Scene, sampling};
+use radlab_visibility::{Accel, Segment};
 use rayon::prelude::*;
 
 use super::config::{ReferenceConfig, ReferenceKind};

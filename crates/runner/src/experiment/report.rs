@@ -149,7 +149,7 @@ pub fn markdown(
              error is relative to max(|reference|, {:.0}% of the scene's area-mean reference radiosity) at each \
              point. The image error is the mean relative difference of the best run's image from the path-traced \
              reference image (path tracing's image is rendered at the paths per point it reached).\n",
-            radlab_scene::error_metric::MAX_ERROR_FLOOR * 100.0
+            radlab_method::error_metric::MAX_ERROR_FLOOR * 100.0
         );
         let _ = writeln!(
             s,

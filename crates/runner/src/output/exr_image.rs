@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use radlab_scene::Image;
+use radlab_answer::Image;
 
 use super::atomic::write_via_temp;
 
@@ -47,7 +47,7 @@ pub fn read_exr(path: &Path) -> Result<Image> {
     )
     .with_context(|| format!("cannot read EXR {}", path.display()))?;
     let size = img.layer_data.size;
-    Ok(radlab_scene::Image {
+    Ok(radlab_answer::Image {
         width: size.width() as u32,
         height: size.height() as u32,
         pixels: img.layer_data.channel_data.pixels.1,

@@ -8,7 +8,8 @@
 use std::path::Path;
 
 use anyhow::Result;
-use radlab_scene::{Polygon, Rgb, Scene, Solution};
+use radlab_method::Solution;
+use radlab_scene::{Polygon, Rgb, Scene};
 use rayon::prelude::*;
 
 use super::atomic::write_bytes;

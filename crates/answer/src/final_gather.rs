@@ -1,0 +1,1035 @@
+//! Final gather: the radiosity at a query point recomputed from a finite-element solution by one more
+//! application of the radiosity equation (Cohen & Wallace 1993, "Radiosity and Realistic Image Synthesis",
+//! ch. 9; Lischinski, Tampieri & Greenberg 1993 use it for their displayed radiosity):
+//!
+//! B(x) = E(x) + ρ(x) Σ_j F_{x→j} V_xj B_j,
+//!
+//! over the solution's source elements j (polygon, face, radiosity), with the exact point-to-polygon factor
+//! F_{x→j} ([`radlab_kernels::form_factor::point_polygon`], Nishita & Nakamae 1985; Baum, Rushmeier & Winget 1989,
+//! eq. 3) and the visibility fraction V_xj from rays through the shared [`Accel`]. The error of the element
+//! solution then enters only through the integral, which smooths it: constant-element staircases and
+//! discontinuities at element edges disappear, and direct light from exactly represented emitters is exact
+//! up to the visibility estimate.
+//!
+//! Visibility: toward emitting sources (the direct light, whose shadows are sharp) `direct` rays per source
+//! element (default 4 × 4 stratified points on the source, [`DEFAULT_DIRECT_VISIBILITY`]); toward the others
+//! `indirect` rays (default one ray to the centroid, [`DEFAULT_INDIRECT_VISIBILITY`]). A source whose
+//! radiosity is that of its open part only ([`ElementValue::open`] < 1, [`radlab_kernels::open_fraction`]) gets the
+//! `direct` rays too: its visible share must be measured over its area, since one ray to its centroid would
+//! count it whole or not at all. The random points of a
+//! query come from a stream derived from the seed and the query point's coordinates, so an answer depends only
+//! on (solution, point, seed), never on the order or thread of the queries. Sources on the query's own face
+//! (planar, so it cannot see them) and sources with B_j = 0 are skipped.
+//!
+//! Near field: a constant B_j is its element's mean, but a query point close to a source element, relative to
+//! the element's size, sees mostly the part of it nearest the point: a point millimetres from a room's corner
+//! sees the top of the wall, darker than the wall element's mean, and a point beside a contact sees the
+//! shadowed part of the element next to it. There the gather would pass the element's discretisation error
+//! on undamped. A non-emitting source j (with no sealed part) closer to the query point than [`NEAR_FIELD`]
+//! times its diameter is therefore gathered as 4 × 4 sub-polygons k (two [`radlab_scene::Polygon::split4`]s), each
+//! with its exact factor F_{x→k} (they sum to F_{x→j}), one visibility ray to one of its four quarters'
+//! centroids q (chosen at random) and the radiosity B(q) there:
+//!
+//! B(x) = E + ρ (Σ_far F V B_j + Σ_near Σ_k F_k V_k B(q_k)).
+//!
+//! B(q) is one more gather at q, split by distance so that it costs little more than one gather per element
+//! (Lischinski, Tampieri & Greenberg 1993 gather the near field of a point more finely in the same spirit).
+//! The near set S of j is every emitter and every element within [`NEAR_SET`] diameters of j's centroid c;
+//! their factors and visibility (one ray each) are evaluated at q. The rest of the scene changes slowly over j,
+//! so it is gathered once, at c, and spread as a mean radiosity B_far over the share of the hemisphere S
+//! leaves: T(q) = Σ_{i∈S} F_{q→i} V B_i + (1 − Σ_{i∈S} F_{q→i}) B_far, B_far = Σ_{i∉S} F_{c→i} V B_i /
+//! (1 − Σ_{i∈S} F_{c→i}). The 64 values are then centred on the solution's own value of the element,
+//! B(q) = max(0, B_j + ρ_j (T(q) − T̄)) with T̄ their mean over the quarters' areas, so the near field moves
+//! light within j (toward its lit side, away from a contact or a corner) and, but for that clamp, never
+//! changes its total. Unlike interpolating vertex values (Gouraud), each B(q) has its own visibility, so
+//! contact shadows stay sharp. The values depend only on the solution and the element, so each near element's
+//! are computed once, at its first near query, and kept.
+//!
+//! A caller with a faster gather of the same values (face clusters' gather over their tree) may supply the
+//! far part instead ([`FarField`]): B_far = (H(c) − Σ_{i∈S} F_{c→i} V B_i) / (1 − Σ_{i∈S} F_{c→i}), with H(c)
+//! that gather's Σ_i F V B_i at c over every source; a near source then costs that gather and its near set,
+//! not a pass over every source.
+//!
+//! Cost per query: one kernel evaluation per source element in front of the point and 16 per near source, plus
+//! their rays; the first time an element is near some query, one gather at its centroid and 64 evaluations
+//! per member of its near set, with their rays. All are counted in
+//! [`FinalGather::rays`] and [`FinalGather::kernel_evaluations`] so the method answering can charge them.
+
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::DVec3;
+
+use crate::gouraud::ElementValue;
+use radlab_kernels::form_factor::{VisibilitySampling, point_polygon};
+use radlab_scene::sampling::{self, mix64};
+use radlab_scene::{FaceId, Polygon, Rgb, Scene};
+use radlab_visibility::{Accel, Segment};
+
+/// Default visibility toward emitting source elements.
+pub const DEFAULT_DIRECT_VISIBILITY: VisibilitySampling = VisibilitySampling::Jittered4x4;
+/// Default visibility toward non-emitting source elements.
+pub const DEFAULT_INDIRECT_VISIBILITY: VisibilitySampling = VisibilitySampling::Centre;
+/// A non-emitting source element is gathered through its 4 × 4 sub-polygons, each with its own radiosity,
+/// when the query point is closer to it than this multiple of its diameter.
+pub const NEAR_FIELD: f64 = 1.0;
+
+/// The near set of a near source: emitters, and the elements closer to its centroid than this multiple of its
+/// diameter. Off the distances of regular meshes (a square element's diameter times 1.5 is exactly the distance
+/// to the corner of an element one and a half cells away), so that rounding never decides membership and
+/// answers do not change with the scene's scale.
+pub const NEAR_SET: f64 = 1.55;
+/// The smallest share of a hemisphere the far part's radiosity is spread over (a guard against dividing by a
+/// vanishing remainder when the near set fills a centroid's view).
+const MIN_FAR_SHARE: f64 = 0.05;
+
+/// A near source's 4 × 4 sub-polygons, each with the centroids of its four quarters and the radiosity
+/// gathered at each.
+type NearValues = Box<[(Polygon, [(DVec3, Rgb); 4])]>;
+
+/// How a final gather estimates visibility, and its random seed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GatherSettings {
+    /// Rays toward each emitting source element.
+    pub direct: VisibilitySampling,
+    /// Rays toward each non-emitting source element.
+    pub indirect: VisibilitySampling,
+    /// Seed of the visibility streams.
+    pub seed: u64,
+}
+
+impl GatherSettings {
+    /// The defaults with `seed`.
+    pub fn with_seed(seed: u64) -> Self {
+        Self {
+            direct: DEFAULT_DIRECT_VISIBILITY,
+            indirect: DEFAULT_INDIRECT_VISIBILITY,
+            seed,
+        }
+    }
+
+    /// The visible share V_xj of source element `src` from `point` on `face`: `direct` rays toward an emitting
+    /// source (`emits`) or one whose radiosity is that of its open part, `indirect` rays toward the others;
+    /// jittered points come from the query's stream `key` and the source's `stream`. Rays are added to `rays`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn visible_share(
+        &self,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        key: u64,
+        stream: u64,
+        src: &ElementValue,
+        emits: bool,
+        rays: &mut u64,
+    ) -> f64 {
+        self.share(accel, face, point, None, key, stream, src, emits, rays)
+    }
+
+    /// As [`GatherSettings::visible_share`], but each jittered ray weighted by the point kernel it stands for,
+    ///
+    ///   V_xj = Σ_k w_k V_k / Σ_k w_k,   w_k = max(0, n·(y_k − x)) max(0, n_j·(x − y_k)) / |y_k − x|⁴,
+    ///
+    /// so that F_xj V_xj estimates ∫_j V k dA, the light that gets through, and not F_xj times the share of
+    /// the source's area that is seen. The two differ where what is hidden is where the kernel is small or
+    /// large: a large light seen past a ridge from far away has its far side, nearer the horizon and fainter,
+    /// hidden first, and the area share then undercounts what arrives. `normal` is the query point's. The
+    /// same rays as [`GatherSettings::visible_share`] (one ray or none: the same share); if no sample has
+    /// weight, the area share. Each weight is a point-kernel evaluation, added to `kernels`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn kernel_weighted_share(
+        &self,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        normal: DVec3,
+        key: u64,
+        stream: u64,
+        src: &ElementValue,
+        emits: bool,
+        rays: &mut u64,
+        kernels: &mut u64,
+    ) -> f64 {
+        self.share(
+            accel,
+            face,
+            point,
+            Some((normal, kernels)),
+            key,
+            stream,
+            src,
+            emits,
+            rays,
+        )
+    }
+
+    /// [`GatherSettings::visible_share`], kernel-weighted when the query's normal (and a count of kernel
+    /// evaluations) is given.
+    #[allow(clippy::too_many_arguments)]
+    fn share(
+        &self,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        weighting: Option<(DVec3, &mut u64)>,
+        key: u64,
+        stream: u64,
+        src: &ElementValue,
+        emits: bool,
+        rays: &mut u64,
+    ) -> f64 {
+        let how = if emits || src.open < 1.0 {
+            self.direct
+        } else {
+            self.indirect
+        };
+        match how {
+            VisibilitySampling::Unoccluded => 1.0,
+            VisibilitySampling::Centre => {
+                *rays += 1;
+                if accel.visible_between(point, face, src.polygon.centroid(), src.face) {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            _ => {
+                let total = how.rays() as usize;
+                let side = (total as f64).sqrt().round() as usize;
+                let mut r = sampling::rng(self.seed, key ^ mix64(stream));
+                // The rays share their origin: one packet.
+                let mut segments = [Segment {
+                    p: point,
+                    fp: face,
+                    q: DVec3::ZERO,
+                    fq: src.face,
+                }; 64];
+                for (k, s) in segments.iter_mut().enumerate().take(total) {
+                    let u = (((k % side) as f64) + sampling::uniform(&mut r)) / side as f64;
+                    let w = (((k / side) as f64) + sampling::uniform(&mut r)) / side as f64;
+                    s.q = src.polygon.point_at(u, w);
+                }
+                let mut visible = [false; 64];
+                accel.visible_many(&segments[..total], &mut visible[..total]);
+                *rays += total as u64;
+                let area_share =
+                    || visible[..total].iter().filter(|&&v| v).count() as f64 / total as f64;
+                let Some((n, kernels)) = weighting else {
+                    return area_share();
+                };
+                *kernels += total as u64;
+                let nj = src.polygon.normal();
+                let (mut seen, mut all) = (0.0, 0.0);
+                for (s, &v) in segments[..total].iter().zip(&visible[..total]) {
+                    let d = s.q - point;
+                    let d2 = d.length_squared();
+                    let w = n.dot(d).max(0.0) * (-nj.dot(d)).max(0.0) / (d2 * d2);
+                    all += w;
+                    if v {
+                        seen += w;
+                    }
+                }
+                if all > 0.0 && all.is_finite() {
+                    seen / all
+                } else {
+                    area_share()
+                }
+            }
+        }
+    }
+}
+
+/// A source element's near field: the points within [`NEAR_FIELD`] of its diameter, and a sphere (centroid,
+/// largest vertex distance) that bounds the element.
+#[derive(Debug)]
+struct Reach {
+    distance: f64,
+    centre: DVec3,
+    radius: f64,
+}
+
+impl Reach {
+    fn of(polygon: &Polygon) -> Self {
+        let centre = polygon.centroid();
+        Self {
+            distance: NEAR_FIELD * polygon.diameter(),
+            centre,
+            radius: polygon
+                .vertices()
+                .iter()
+                .map(|v| (*v - centre).length())
+                .fold(0.0, f64::max),
+        }
+    }
+
+    /// Whether `point` is in the near field of `polygon` (this reach's element). A point is at least
+    /// |point − centre| − radius from the element, so where that bound, less a margin far above the rounding
+    /// of either distance, is beyond the reach, the exact distance to the polygon is not computed; the
+    /// answer is the same.
+    fn holds(&self, polygon: &Polygon, point: DVec3) -> bool {
+        !self.surely_beyond(point) && polygon.distance_to(point) < self.distance
+    }
+
+    /// Whether the bounding sphere alone places `point` beyond the reach.
+    fn surely_beyond(&self, point: DVec3) -> bool {
+        self.surely_farther(point, self.distance)
+    }
+
+    /// Whether the bounding sphere alone places `point` at least `distance` from the element.
+    fn surely_farther(&self, point: DVec3, distance: f64) -> bool {
+        let d = (point - self.centre).length();
+        d - self.radius - 1e-9 * (d + self.radius) >= distance
+    }
+}
+
+/// A cheaper estimate of what the whole scene sends to a point, for the far part of a near source's values
+/// (see the module documentation): Σ_i F_{x→i} V_xi B_i over every source element at `point` on `face`, as
+/// the solution's own faster gather computes it (face clusters' gather over their tree), with its work
+/// counted by its owner. A [`FinalGather`] must be queried with the same far field (or none) throughout,
+/// since each near source's values are computed once, at its first near query.
+pub trait FarField: Sync {
+    /// Σ_i F V B_i at `point` on `face`.
+    fn irradiance(&self, face: FaceId, point: DVec3) -> Rgb;
+}
+
+/// The random stream of a query: a hash of the face and of the point's coordinates along two of the face's
+/// edges in units of those edges, quantised to 2^-30, so the stream (and the answer) does not change when the
+/// scene is scaled.
+pub fn query_key(scene: &Scene, face: FaceId, point: DVec3) -> u64 {
+    let poly = scene.polygon(face);
+    let v = poly.vertices();
+    let d = point - v[0];
+    let q = |e: DVec3| {
+        let l2 = e.length_squared();
+        let t = if l2 > 0.0 { d.dot(e) / l2 } else { 0.0 };
+        (t * (1u64 << 30) as f64).round() as i64 as u64
+    };
+    let (a, b) = (q(v[1] - v[0]), q(v[v.len() - 1] - v[0]));
+    mix64(a ^ mix64(b ^ mix64(face as u64)))
+}
+
+/// A solution's source elements, ready to gather from.
+#[derive(Debug)]
+pub struct FinalGather {
+    sources: Vec<(ElementValue, bool)>,
+    /// Per source, its near-field reach and a sphere bounding it.
+    reach: Vec<Reach>,
+    /// Per source, its near-field sub-polygons with their radiosities, computed at the first near query.
+    near: Vec<OnceLock<NearValues>>,
+    settings: GatherSettings,
+    rays: AtomicU64,
+    kernels: AtomicU64,
+}
+
+impl FinalGather {
+    /// Gathers from `elements` (those with zero radiosity are dropped); `emitting(face)` tells which faces
+    /// emit, for the choice of visibility sampling.
+    pub fn new(scene: &Scene, elements: &[ElementValue], settings: GatherSettings) -> Self {
+        let sources = elements
+            .iter()
+            .filter(|e| e.radiosity.max_element() > 0.0)
+            .map(|e| (*e, scene.material(e.face).is_emitter()))
+            .collect::<Vec<_>>();
+        Self {
+            near: (0..sources.len()).map(|_| OnceLock::new()).collect(),
+            reach: sources.iter().map(|(e, _)| Reach::of(&e.polygon)).collect(),
+            sources,
+            settings,
+            rays: AtomicU64::new(0),
+            kernels: AtomicU64::new(0),
+        }
+    }
+
+    /// Number of source elements gathered from.
+    pub fn source_count(&self) -> usize {
+        self.sources.len()
+    }
+
+    /// Rays cast by all queries so far.
+    pub fn rays(&self) -> u64 {
+        self.rays.load(Ordering::Relaxed)
+    }
+
+    /// Point-to-polygon kernel evaluations of all queries so far.
+    pub fn kernel_evaluations(&self) -> u64 {
+        self.kernels.load(Ordering::Relaxed)
+    }
+
+    /// Approximate heap bytes held.
+    pub fn bytes(&self) -> usize {
+        self.sources.capacity() * size_of::<(ElementValue, bool)>()
+            + self.reach.capacity() * size_of::<Reach>()
+            + self.near.capacity() * size_of::<OnceLock<NearValues>>()
+            + self
+                .near
+                .iter()
+                .filter_map(|n| n.get())
+                .map(|v| v.len() * size_of::<(Polygon, [(DVec3, Rgb); 4])>())
+                .sum::<usize>()
+    }
+
+    /// B(x) at `point` on `face` (see the module documentation). NaN for a face outside the scene.
+    pub fn radiosity_at(&self, scene: &Scene, accel: &Accel, face: FaceId, point: DVec3) -> Rgb {
+        self.radiosity_with(scene, accel, face, point, None)
+    }
+
+    /// [`FinalGather::radiosity_at`], with the far part of near sources' values from `far` where given
+    /// (instead of a gather over every source at each near source's centroid, O(n) a near source).
+    pub fn radiosity_with(
+        &self,
+        scene: &Scene,
+        accel: &Accel,
+        face: FaceId,
+        point: DVec3,
+        far: Option<&dyn FarField>,
+    ) -> Rgb {
+        if face >= scene.faces.len() {
+            return Rgb::splat(f64::NAN);
+        }
+        let (mut rays, mut kernels) = (0u64, 0u64);
+        let b = self.gather(scene, accel, (face, point), far, &mut rays, &mut kernels);
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+        self.kernels.fetch_add(kernels, Ordering::Relaxed);
+        b
+    }
+
+    /// Source `j`'s 4 × 4 sub-polygons, each with the radiosity at the centroids of its four quarters (see
+    /// the module documentation for the near/far split).
+    fn near_values(
+        &self,
+        scene: &Scene,
+        accel: &Accel,
+        j: usize,
+        far_field: Option<&dyn FarField>,
+    ) -> NearValues {
+        let src = &self.sources[j].0;
+        let (c, n) = (src.polygon.centroid(), scene.faces[src.face].normal);
+        let reach = NEAR_SET * src.polygon.diameter();
+        let (mut rays, mut kernels) = (0u64, 0u64);
+        // The near set: every emitter, and the elements within reach of the centroid (the bounding spheres
+        // rule most out before the exact distance).
+        let is_near: Vec<bool> = self
+            .sources
+            .iter()
+            .zip(&self.reach)
+            .map(|((s, emits), bound)| {
+                s.face != src.face
+                    && (*emits
+                        || (!bound.surely_farther(c, reach) && s.polygon.distance_to(c) < reach))
+            })
+            .collect();
+        let near: Vec<usize> = (0..is_near.len()).filter(|&i| is_near[i]).collect();
+        let key = query_key(scene, src.face, c);
+        // The far part at the centroid, as a mean radiosity over the hemisphere the near set leaves.
+        let (mut far, mut f_near) = (Rgb::ZERO, 0.0);
+        match far_field {
+            None => {
+                for (i, (s, _)) in self.sources.iter().enumerate() {
+                    if s.face == src.face {
+                        continue;
+                    }
+                    kernels += 1;
+                    let f = point_polygon(c, n, &s.polygon);
+                    if !(f > 0.0) {
+                        continue;
+                    }
+                    if is_near[i] {
+                        f_near += f;
+                        continue;
+                    }
+                    rays += 1;
+                    if accel.visible_between(c, src.face, s.polygon.centroid(), s.face) {
+                        far += f * s.radiosity;
+                    }
+                }
+            }
+            Some(field) => {
+                // The whole scene's light at c less the near set's, each near source seen as the gather
+                // sees it (its visibility rays).
+                far = field.irradiance(src.face, c);
+                for &i in &near {
+                    let (s, emits) = &self.sources[i];
+                    kernels += 1;
+                    let f = point_polygon(c, n, &s.polygon);
+                    if !(f > 0.0) {
+                        continue;
+                    }
+                    f_near += f;
+                    let v = self
+                        .settings
+                        .visible_share(accel, src.face, c, key, i as u64, s, *emits, &mut rays);
+                    far -= (f * v) * s.radiosity;
+                }
+                far = far.max(Rgb::ZERO);
+            }
+        }
+        let far_mean = far / (1.0 - f_near).max(MIN_FAR_SHARE);
+        // T(q) at the 64 quarter centroids.
+        let subs: Vec<(Polygon, [Polygon; 4])> = src
+            .polygon
+            .split4()
+            .iter()
+            .flat_map(|q| q.split4())
+            .map(|sub| (sub, sub.split4()))
+            .collect();
+        let areas: Vec<[f64; 4]> = subs
+            .iter()
+            .map(|(_, quarters)| quarters.map(|quarter| quarter.area()))
+            .collect();
+        let mut values: Vec<(Polygon, [(DVec3, Rgb); 4])> = subs
+            .into_iter()
+            .map(|(sub, quarters)| {
+                let points = quarters.map(|quarter| {
+                    let q = quarter.centroid();
+                    let mut r = sampling::rng(
+                        self.settings.seed,
+                        key ^ mix64(query_key(scene, src.face, q)),
+                    );
+                    let (mut t, mut f_sum) = (Rgb::ZERO, 0.0);
+                    for &i in &near {
+                        let s = &self.sources[i].0;
+                        kernels += 1;
+                        let f = point_polygon(q, n, &s.polygon);
+                        if !(f > 0.0) {
+                            continue;
+                        }
+                        f_sum += f;
+                        rays += 1;
+                        let (u, w) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
+                        if accel.visible_between(q, src.face, s.polygon.point_at(u, w), s.face) {
+                            t += f * s.radiosity;
+                        }
+                    }
+                    (q, t + (1.0 - f_sum).max(0.0) * far_mean)
+                });
+                (sub, points)
+            })
+            .collect();
+        // Centred on the area mean over the quarters (equal areas but for a quad that is not a parallelogram).
+        let (mut mean, mut area) = (Rgb::ZERO, 0.0);
+        for ((_, points), quarters) in values.iter().zip(&areas) {
+            for ((_, t), a) in points.iter().zip(quarters) {
+                mean += *a * *t;
+                area += a;
+            }
+        }
+        let mean = if area > 0.0 { mean / area } else { Rgb::ZERO };
+        let rho = scene.reflectance(src.face);
+        for (_, points) in values.iter_mut() {
+            for (_, b) in points.iter_mut() {
+                *b = (src.radiosity + rho * (*b - mean)).max(Rgb::ZERO);
+            }
+        }
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+        self.kernels.fetch_add(kernels, Ordering::Relaxed);
+        values.into_boxed_slice()
+    }
+
+    /// E(x) + ρ(x) Σ_j F V B_j at `point` on `face`, near sources through their near field (see the module
+    /// documentation); its rays and kernel evaluations are added to the two counters.
+    fn gather(
+        &self,
+        scene: &Scene,
+        accel: &Accel,
+        (face, point): (FaceId, DVec3),
+        far: Option<&dyn FarField>,
+        rays: &mut u64,
+        kernels: &mut u64,
+    ) -> Rgb {
+        let n = scene.faces[face].normal;
+        let rho = scene.reflectance(face);
+        let e = scene.emission(face);
+        if rho.max_element() <= 0.0 {
+            return e;
+        }
+        let key = query_key(scene, face, point);
+        let mut sum = Rgb::ZERO;
+        for (j, (src, emits)) in self.sources.iter().enumerate() {
+            if src.face == face {
+                continue;
+            }
+            *kernels += 1;
+            let f = point_polygon(point, n, &src.polygon);
+            if !(f > 0.0) {
+                continue;
+            }
+            if !*emits && src.open >= 1.0 && self.reach[j].holds(&src.polygon, point) {
+                let subs = self.near[j].get_or_init(|| self.near_values(scene, accel, j, far));
+                let mut r = sampling::rng(self.settings.seed, key ^ mix64(j as u64));
+                for (sub, points) in subs.iter() {
+                    *kernels += 1;
+                    let fk = point_polygon(point, n, sub);
+                    if !(fk > 0.0) {
+                        continue;
+                    }
+                    *rays += 1;
+                    let (y, b) = points[((sampling::uniform(&mut r) * 4.0) as usize).min(3)];
+                    if accel.visible_between(point, face, y, src.face) {
+                        sum += fk * b;
+                    }
+                }
+                continue;
+            }
+            let v = self
+                .settings
+                .visible_share(accel, face, point, key, j as u64, src, *emits, rays);
+            sum += (f * v) * src.radiosity;
+        }
+        e + rho * sum
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ElementMesh;
+    use glam::dvec3;
+    use radlab_scene::builtin;
+
+    /// The near-field test with its bounding-sphere shortcut answers as the exact distance test, for
+    /// triangles and quads at scales 1e-4 to 1e4 and points from on the element to far from it, many of them
+    /// right at the reach; and the shortcut is taken.
+    #[test]
+    fn the_near_field_shortcut_answers_as_the_distance_test() {
+        let mut r = sampling::rng(31, 0);
+        let mut u = || sampling::uniform(&mut r);
+        let (mut near, mut far, mut shortcut) = (0, 0, 0);
+        for k in 0..20_000 {
+            let scale = [1e-4, 1.0, 1e4][k % 3];
+            let o = scale * dvec3(u() - 0.5, u() - 0.5, u() - 0.5);
+            let (a, b) = (
+                scale * dvec3(u(), u() * 0.1, 0.0),
+                scale * dvec3(u() * 0.2, u(), 0.0),
+            );
+            let poly = if k % 2 == 0 {
+                Polygon::triangle(o, o + a, o + b)
+            } else {
+                Polygon::quad(o, o + a, o + a + b, o + b)
+            };
+            let reach = Reach::of(&poly);
+            // A direction, and a distance from the centroid up to four reaches, or exactly at the reach
+            // from the nearest point of an edge.
+            let d = dvec3(u() - 0.5, u() - 0.5, u() - 0.5).normalize_or(DVec3::Z);
+            let p = if k % 4 == 0 {
+                let v = poly.vertices();
+                let e = v[1].lerp(v[0], u());
+                e + reach.distance * d
+            } else {
+                reach.centre + 4.0 * u() * (reach.distance + reach.radius) * d
+            };
+            let exact = poly.distance_to(p) < NEAR_FIELD * poly.diameter();
+            assert_eq!(reach.holds(&poly, p), exact, "scale {scale}, case {k}");
+            shortcut += usize::from(reach.surely_beyond(p));
+            if exact {
+                near += 1;
+            } else {
+                far += 1;
+            }
+        }
+        assert!(
+            near > 3000 && far > 3000 && shortcut > 3000,
+            "{near} {far} {shortcut}"
+        );
+    }
+
+    /// Howell B-3: differential area below the corner of a parallel a × b rectangle at height h.
+    fn corner(a: f64, b: f64, h: f64) -> f64 {
+        let (x, y) = (a / h, b / h);
+        (x / (1. + x * x).sqrt() * (y / (1. + x * x).sqrt()).atan()
+            + y / (1. + y * y).sqrt() * (x / (1. + y * y).sqrt()).atan())
+            / (2.0 * std::f64::consts::PI)
+    }
+
+    #[test]
+    fn exact_for_unoccluded_direct_light_between_parallel_plates() {
+        // Receiver z = 0 facing up, emitter 0.7 above facing down, both meshed 3 × 3; gathering from the
+        // emitter's exact elements (B = E, ρ = 0) gives B(x) = ρ E F(x → emitter) with F the sum of four
+        // corner rectangles (Howell B-3), whatever the visibility sampling (nothing occludes).
+        let (w, d, h, e, rho) = (1.0, 0.6, 0.7, 2.0, 0.4);
+        let scene = builtin(&format!(
+            "parallel-squares?width={w}&depth={d}&distance={h}&emission={e}&reflectance={rho}&tessellation=3"
+        ))
+        .expect("plates");
+        let accel = Accel::new(&scene);
+        let mesh = ElementMesh::new(&scene, 0.1);
+        let emission: Vec<Rgb> = mesh
+            .elements
+            .iter()
+            .map(|el| scene.emission(el.face as usize))
+            .collect();
+        let els = mesh.values(&emission);
+        let g = FinalGather::new(&scene, &els, GatherSettings::with_seed(7));
+        let f_exact = |x: f64, y: f64| {
+            corner(x, y, h) + corner(w - x, y, h) + corner(x, d - y, h) + corner(w - x, d - y, h)
+        };
+        for (x, y) in [(0.5, 0.3), (0.1, 0.05), (0.93, 0.41), (0.0, 0.0)] {
+            let p = glam::dvec3(x, y, 0.0);
+            let f = (0..scene.faces.len())
+                .find(|&f| !scene.material(f).is_emitter() && scene.polygon(f).contains(p, 1e-9))
+                .expect("a receiver face");
+            let b = g.radiosity_at(&scene, &accel, f, p);
+            let want = rho * e * f_exact(x, y);
+            assert!(
+                (b - Rgb::splat(want)).abs().max_element() < 1e-12 * want.max(1.0),
+                "({x}, {y}): {b} vs {want}"
+            );
+        }
+    }
+
+    /// A light half hidden from a point, its far half, where the kernel is small: the kernel-weighted share
+    /// estimates the factor of the part that is seen over the whole light's (exact: the point-to-polygon factor
+    /// of the visible part, Lambert's contour integral), where the share of the area seen (one half) does not.
+    #[test]
+    fn kernel_weighted_share_estimates_the_factor_of_what_is_seen() {
+        use radlab_scene::SceneBuilder;
+        use radlab_testkit::material;
+        // Receiver at the origin facing +z; light at z = 1 over x ∈ [0.5, 4.5], |y| ≤ 1, facing down; a plate
+        // at z = 0.5 over x ≥ 1.25 hides from the origin every point of the light with x ≥ 2.5.
+        let build = |blocked: bool| {
+            let mut b = SceneBuilder::new("half-hidden light");
+            let (ground, light) = (
+                material(&mut b, "ground", 0.5, 0.0),
+                material(&mut b, "light", 0.0, 1.0),
+            );
+            b.add_polygon_points(
+                &[
+                    dvec3(-0.1, -0.1, 0.0),
+                    dvec3(0.1, -0.1, 0.0),
+                    dvec3(0.1, 0.1, 0.0),
+                    dvec3(-0.1, 0.1, 0.0),
+                ],
+                ground,
+                "receiver",
+            )
+            .expect("receiver");
+            b.add_polygon_points(
+                &[
+                    dvec3(0.5, -1.0, 1.0),
+                    dvec3(0.5, 1.0, 1.0),
+                    dvec3(4.5, 1.0, 1.0),
+                    dvec3(4.5, -1.0, 1.0),
+                ],
+                light,
+                "light",
+            )
+            .expect("light");
+            if blocked {
+                b.add_polygon_points(
+                    &[
+                        dvec3(1.25, -3.0, 0.5),
+                        dvec3(6.0, -3.0, 0.5),
+                        dvec3(6.0, 3.0, 0.5),
+                        dvec3(1.25, 3.0, 0.5),
+                    ],
+                    ground,
+                    "blocker",
+                )
+                .expect("blocker");
+            }
+            b.build().expect("scene")
+        };
+        let (x, n) = (DVec3::ZERO, DVec3::Z);
+        let whole = Polygon::quad(
+            dvec3(0.5, -1.0, 1.0),
+            dvec3(0.5, 1.0, 1.0),
+            dvec3(4.5, 1.0, 1.0),
+            dvec3(4.5, -1.0, 1.0),
+        );
+        let seen = Polygon::quad(
+            dvec3(0.5, -1.0, 1.0),
+            dvec3(0.5, 1.0, 1.0),
+            dvec3(2.5, 1.0, 1.0),
+            dvec3(2.5, -1.0, 1.0),
+        );
+        let exact = point_polygon(x, n, &seen) / point_polygon(x, n, &whole);
+        assert!(
+            exact > 0.75,
+            "the near half carries most of the light: {exact}"
+        );
+        let settings = GatherSettings::with_seed(3);
+        for blocked in [false, true] {
+            let scene = build(blocked);
+            let accel = Accel::new(&scene);
+            let light = (0..scene.faces.len())
+                .find(|&f| scene.material(f).is_emitter())
+                .expect("light");
+            assert!((scene.faces[light].normal - -DVec3::Z).length() < 1e-12);
+            let src = ElementValue {
+                face: light,
+                polygon: scene.polygon(light),
+                radiosity: Rgb::ONE,
+                open: 1.0,
+            };
+            let (mut weighted, mut area, mut rays, mut kernels) = (0.0, 0.0, 0u64, 0u64);
+            let queries = 400;
+            for key in 0..queries {
+                weighted += settings.kernel_weighted_share(
+                    &accel,
+                    0,
+                    x,
+                    n,
+                    key,
+                    9,
+                    &src,
+                    true,
+                    &mut rays,
+                    &mut kernels,
+                );
+                area += settings.visible_share(&accel, 0, x, key, 9, &src, true, &mut rays);
+            }
+            let (weighted, area) = (weighted / queries as f64, area / queries as f64);
+            assert_eq!(rays, 2 * queries * DEFAULT_DIRECT_VISIBILITY.rays() as u64);
+            assert_eq!(kernels, queries * DEFAULT_DIRECT_VISIBILITY.rays() as u64);
+            if blocked {
+                assert!(
+                    (weighted - exact).abs() < 0.01,
+                    "weighted {weighted} against {exact}"
+                );
+                assert!((area - 0.5).abs() < 0.01, "area share {area}");
+            } else {
+                assert_eq!((weighted, area), (1.0, 1.0));
+            }
+        }
+    }
+
+    /// A far field that is the same sum over every source with the same visibility rays (one to each
+    /// non-emitter's centroid, the emitters' jittered rays from the same streams) gives the same near-field
+    /// values as the gather's own pass over every source: far part = the whole sum less the near set's. So
+    /// answers at points beside element edges of the Cornell box (its blocks cast shadows; radiosities vary
+    /// from element to element) agree to rounding, with the near field exercised.
+    #[test]
+    fn a_far_field_summing_every_source_answers_as_the_own_far_part() {
+        struct EverySource<'g> {
+            gather: &'g FinalGather,
+            scene: &'g Scene,
+            accel: &'g Accel,
+        }
+        impl FarField for EverySource<'_> {
+            fn irradiance(&self, face: FaceId, point: DVec3) -> Rgb {
+                let n = self.scene.faces[face].normal;
+                let key = query_key(self.scene, face, point);
+                let mut rays = 0;
+                let mut sum = Rgb::ZERO;
+                for (i, (s, emits)) in self.gather.sources.iter().enumerate() {
+                    let f = point_polygon(point, n, &s.polygon);
+                    if s.face == face || !(f > 0.0) {
+                        continue;
+                    }
+                    let v = self.gather.settings.visible_share(
+                        self.accel, face, point, key, i as u64, s, *emits, &mut rays,
+                    );
+                    sum += (f * v) * s.radiosity;
+                }
+                sum
+            }
+        }
+        let scene = builtin("cornell").expect("cornell");
+        let accel = Accel::new(&scene);
+        let mesh = ElementMesh::new(&scene, 150.0);
+        let values: Vec<Rgb> = (0..mesh.len())
+            .map(|i| Rgb::new(0.2, 0.3, 0.4) * (1.0 + (i % 7) as f64 / 7.0))
+            .collect();
+        let els = mesh.values(&values);
+        let own = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
+        let given = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
+        let far = EverySource {
+            gather: &given,
+            scene: &scene,
+            accel: &accel,
+        };
+        for (k, el) in els.iter().enumerate().step_by(5) {
+            let p = el.polygon.point_at(0.03, 0.5);
+            let a = own.radiosity_at(&scene, &accel, el.face, p);
+            let b = given.radiosity_with(&scene, &accel, el.face, p, Some(&far));
+            assert!(
+                (a - b).abs().max_element() <= 1e-9 * a.max_element(),
+                "element {k}: {a} vs {b}"
+            );
+        }
+        let near = given.near.iter().filter(|n| n.get().is_some()).count();
+        assert!(
+            near > 20,
+            "the near field must be exercised: {near} sources"
+        );
+    }
+
+    #[test]
+    fn counts_its_work_and_skips_its_own_face() {
+        // The Cornell box with its faces as elements, B = 1 on every one; a point on the first face near an
+        // edge has near sources (the faces across the edge).
+        let scene = builtin("cornell").expect("cornell");
+        let accel = Accel::new(&scene);
+        let mesh = ElementMesh::new(&scene, 1e9);
+        let els = mesh.values(&vec![Rgb::ONE; mesh.len()]);
+        let g = FinalGather::new(&scene, &els, GatherSettings::with_seed(1));
+        let (p, n) = (scene.polygon(0).point_at(0.02, 0.5), scene.faces[0].normal);
+        let b = g.radiosity_at(&scene, &accel, 0, p);
+        assert!(b.is_finite());
+        let first = g.kernel_evaluations();
+        assert!(g.rays() > 0);
+        // The same query again finds its near elements' values kept: one evaluation per other element and
+        // 16 per near one. The first query paid for those values too.
+        g.radiosity_at(&scene, &accel, 0, p);
+        let near = els
+            .iter()
+            .filter(|e| {
+                e.face != 0
+                    && !scene.material(e.face).is_emitter()
+                    && point_polygon(p, n, &e.polygon) > 0.0
+                    && e.polygon.distance_to(p) < NEAR_FIELD * e.polygon.diameter()
+            })
+            .count();
+        assert!(near > 0, "the case must exercise the near field");
+        let second = g.kernel_evaluations() - first;
+        assert_eq!(second, (els.len() - 1 + 16 * near) as u64);
+        assert!(first > second, "{first} vs {second}");
+    }
+
+    /// A floor (z = 0, facing up) meets a wall (x = 0, facing +x) at an edge; a small light low in front of
+    /// the wall (x = 0.3, facing the wall) makes the wall's radiosity vary steeply near the floor. The other
+    /// surfaces are given zero radiosity and the wall elements their exact means of the one-bounce field
+    /// B_w(y) = ρ_w E F(y → light), so the true radiosity at a floor point x is
+    /// B(x) = ρ_f (E F(x → light) + ∫_wall B_w dF(x → y)), integrated here over 256 × 256 wall cells with the
+    /// exact point-to-polygon factor at each cell's centre. At x = 1 cm from the wall the gather of element
+    /// means is off by more than the near field's bound: ρ_f times, over the wall elements, F_j times the
+    /// spread of B_w within the element (far ones) or, for near ones, Σ_k F_k times the spread within each
+    /// sub-polygon k (a random quarter of k stands for it), plus the centring of the 64 values on the mean.
+    #[test]
+    fn near_field_follows_the_source_into_a_corner() {
+        use radlab_testkit::{grid, material};
+        let (rho_f, rho_w, e) = (0.5, 0.5, 1.0);
+        let mut b = radlab_scene::SceneBuilder::new("corner");
+        let floor_m = material(&mut b, "floor", rho_f, 0.0);
+        let wall_m = material(&mut b, "wall", rho_w, 0.0);
+        let light_m = material(&mut b, "light", 0.0, e);
+        grid(&mut b, DVec3::ZERO, DVec3::X, DVec3::Y, 1, floor_m);
+        grid(&mut b, DVec3::ZERO, DVec3::Y, DVec3::Z, 1, wall_m);
+        let light = Polygon::quad(
+            dvec3(0.3, 0.3, 0.02),
+            dvec3(0.3, 0.3, 0.12),
+            dvec3(0.3, 0.7, 0.12),
+            dvec3(0.3, 0.7, 0.02),
+        );
+        b.add_polygon_points(light.vertices(), light_m, "light")
+            .expect("light");
+        let scene = b.build().expect("scene");
+        assert!(scene.faces[2].normal.x < -0.99, "the light faces the wall");
+        let accel = Accel::new(&scene);
+        let (floor, wall) = (0, 1);
+        let b_wall = |y: DVec3| rho_w * e * point_polygon(y, DVec3::X, &light);
+        // Mean and spread of the wall's field over a polygon, from an m × m grid of points (corners included
+        // for the spread).
+        let mean_of = |poly: &Polygon, m: usize| {
+            let mut sum = 0.0;
+            for j in 0..m {
+                for i in 0..m {
+                    let (u, w) = ((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
+                    sum += b_wall(poly.point_at(u, w));
+                }
+            }
+            sum / (m * m) as f64
+        };
+        let spread_of = |poly: &Polygon| {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for j in 0..=8 {
+                for i in 0..=8 {
+                    let v = b_wall(poly.point_at(i as f64 / 8.0, j as f64 / 8.0));
+                    (lo, hi) = (lo.min(v), hi.max(v));
+                }
+            }
+            hi - lo
+        };
+        let mesh = ElementMesh::new(&scene, 0.25);
+        let values: Vec<Rgb> = mesh
+            .elements
+            .iter()
+            .map(|el| match el.face as usize {
+                f if f == wall => Rgb::splat(mean_of(&el.polygon, 32)),
+                f if f == floor => Rgb::ZERO,
+                _ => Rgb::splat(e),
+            })
+            .collect();
+        let els = mesh.values(&values);
+        let g = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
+        let x = dvec3(0.01, 0.5, 0.0);
+        let up = DVec3::Z;
+        let n = 256;
+        let mut exact = e * point_polygon(x, up, &light);
+        for j in 0..n {
+            for i in 0..n {
+                let (y0, z0, h) = (i as f64 / n as f64, j as f64 / n as f64, 1.0 / n as f64);
+                let cell = Polygon::quad(
+                    dvec3(0., y0, z0),
+                    dvec3(0., y0 + h, z0),
+                    dvec3(0., y0 + h, z0 + h),
+                    dvec3(0., y0, z0 + h),
+                );
+                exact += point_polygon(x, up, &cell) * b_wall(cell.centroid());
+            }
+        }
+        exact *= rho_f;
+        let (mut means, mut bound) = (e * point_polygon(x, up, &light), 0.0);
+        for el in els.iter().filter(|el| el.face == wall) {
+            let f = point_polygon(x, up, &el.polygon);
+            means += f * el.radiosity.x;
+            if el.polygon.distance_to(x) < NEAR_FIELD * el.polygon.diameter() {
+                for sub in el.polygon.split4().iter().flat_map(|q| q.split4()) {
+                    bound += point_polygon(x, up, &sub) * spread_of(&sub);
+                }
+                bound += f * spread_of(&el.polygon) / 64.0;
+            } else {
+                bound += f * spread_of(&el.polygon);
+            }
+        }
+        means *= rho_f;
+        bound *= rho_f;
+        let got = g.radiosity_at(&scene, &accel, floor, x).x;
+        assert!(
+            (means - exact).abs() > bound,
+            "the case must tell the two apart: element means give {means}, exact {exact}, bound {bound}"
+        );
+        assert!(
+            (got - exact).abs() <= bound,
+            "near-field gather {got} against {exact} (bound {bound}; element means gave {means})"
+        );
+    }
+
+    /// The near field's values are kept per element, so answers do not depend on which query made them.
+    #[test]
+    fn answers_do_not_depend_on_the_order_of_queries() {
+        let scene = builtin("cornell").expect("cornell");
+        let accel = Accel::new(&scene);
+        let mesh = ElementMesh::new(&scene, 110.0);
+        let values: Vec<Rgb> = (0..mesh.len())
+            .map(|i| Rgb::splat(0.1 + (i % 7) as f64 * 0.05))
+            .collect();
+        let els = mesh.values(&values);
+        let points: Vec<(usize, DVec3)> = (0..scene.faces.len())
+            .step_by(3)
+            .flat_map(|f| {
+                let poly = scene.polygon(f);
+                [(f, poly.point_at(0.02, 0.5)), (f, poly.point_at(0.5, 0.97))]
+            })
+            .collect();
+        let forward = FinalGather::new(&scene, &els, GatherSettings::with_seed(5));
+        let backward = FinalGather::new(&scene, &els, GatherSettings::with_seed(5));
+        let a: Vec<Rgb> = points
+            .iter()
+            .map(|&(f, p)| forward.radiosity_at(&scene, &accel, f, p))
+            .collect();
+        let mut b: Vec<Rgb> = points
+            .iter()
+            .rev()
+            .map(|&(f, p)| backward.radiosity_at(&scene, &accel, f, p))
+            .collect();
+        b.reverse();
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!(
+                x.to_array().map(f64::to_bits),
+                y.to_array().map(f64::to_bits)
+            );
+        }
+        assert_eq!(forward.rays(), backward.rays());
+        assert_eq!(forward.kernel_evaluations(), backward.kernel_evaluations());
+    }
+}

@@ -1,0 +1,111 @@
+//! # radlab-testkit
+//!
+//! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
+//! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
+//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, and a scene
+//! scaled by a factor (results must not depend on it). Test support, kept in one place so no crate carries
+//! its own copy; nothing in the solvers uses it.
+
+use glam::{DVec3, dvec3};
+
+use radlab_scene::{Material, Rgb, Scene, SceneBuilder};
+
+/// A grey material of reflectance `rho` and emission `e` in every channel; returns its id.
+pub fn material(b: &mut SceneBuilder, name: &str, rho: f64, e: f64) -> u32 {
+    b.add_material(Material::new(name, Rgb::splat(rho), Rgb::splat(e)).expect("material"))
+        .expect("material")
+}
+
+/// An n × n grid of quads over o + s u + t v (s, t ∈ [0, 1]), normal along u × v.
+pub fn grid(b: &mut SceneBuilder, o: DVec3, u: DVec3, v: DVec3, n: usize, m: u32) {
+    for j in 0..n {
+        for i in 0..n {
+            let p = |di: usize, dj: usize| {
+                o + u * ((i + di) as f64 / n as f64) + v * ((j + dj) as f64 / n as f64)
+            };
+            b.add_polygon_points(&[p(0, 0), p(1, 0), p(1, 1), p(0, 1)], m, "grid")
+                .expect("quad");
+        }
+    }
+}
+
+/// The six faces of the box [lo, hi] as (origin, u, v) with u × v pointing outward (or inward).
+pub fn box_sides(lo: DVec3, hi: DVec3, outward: bool) -> Vec<(DVec3, DVec3, DVec3)> {
+    let d = hi - lo;
+    let (x, y, z) = (dvec3(d.x, 0., 0.), dvec3(0., d.y, 0.), dvec3(0., 0., d.z));
+    let sides = [
+        (lo, y, x),     // z = lo, normal −z
+        (lo + z, x, y), // z = hi, +z
+        (lo, z, y),     // x = lo, −x
+        (lo + x, y, z), // x = hi, +x
+        (lo, x, z),     // y = lo, −y
+        (lo + y, z, x), // y = hi, +y
+    ];
+    sides
+        .into_iter()
+        .map(|(o, u, v)| if outward { (o, u, v) } else { (o, v, u) })
+        .collect()
+}
+
+/// The box [lo, hi] as six n × n grids of quads of material `m`, facing outward (or inward).
+pub fn add_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3, n: usize, m: u32, outward: bool) {
+    for (o, u, v) in box_sides(lo, hi, outward) {
+        grid(b, o, u, v, n, m);
+    }
+}
+
+/// The closed unit room (inward faces, 2 × 2 quads per side, h = 0.5) with coloured reflectances; one ceiling
+/// quad is the light (so every face's back is inside a wall and nothing is absorbed by a back); `extra` adds
+/// objects. Every reflectance is positive.
+pub fn room(name: &str, extra: &dyn Fn(&mut SceneBuilder)) -> Scene {
+    let mut b = SceneBuilder::new(name);
+    let refl = [0.7, 0.4, 0.5, 0.6, 0.5, 0.3];
+    let light = material(&mut b, "light", 0.3, 10.0);
+    for (k, (o, u, v)) in box_sides(DVec3::ZERO, DVec3::ONE, false)
+        .into_iter()
+        .enumerate()
+    {
+        let m = material(&mut b, &format!("wall{k}"), refl[k], 0.0);
+        for j in 0..2 {
+            for i in 0..2 {
+                let p = |di: usize, dj: usize| {
+                    o + u * ((i + di) as f64 / 2.0) + v * ((j + dj) as f64 / 2.0)
+                };
+                // The ceiling (side 1, z = 1) has its quad nearest the origin as the light.
+                let mat = if k == 1 && i == 0 && j == 0 { light } else { m };
+                b.add_polygon_points(&[p(0, 0), p(1, 0), p(1, 1), p(0, 1)], mat, "room")
+                    .expect("quad");
+            }
+        }
+    }
+    extra(&mut b);
+    b.build().expect("scene")
+}
+
+/// A closed box (outward faces) on [lo, hi] with a closed unlit interior: inward faces inset by 1e-3 of its size.
+pub fn hollow_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3) {
+    let m = material(b, "box", 0.6, 0.0);
+    add_box(b, lo, hi, 1, m, true);
+    let inside = material(b, "interior", 0.9, 0.0);
+    let inset = 1e-3 * (hi - lo).max_element();
+    add_box(b, lo + inset, hi - inset, 1, inside, false);
+}
+
+/// The scene with every vertex multiplied by `s`: same vertices (so the same mesh connectivity), faces,
+/// indices and materials.
+pub fn scaled(scene: &Scene, s: f64) -> Scene {
+    let mut b = SceneBuilder::new(&format!("{} x {s}", scene.name));
+    for m in &scene.materials {
+        b.add_material(m.clone()).expect("valid material");
+    }
+    for &v in &scene.vertices {
+        b.add_vertex(v * s, "scaled").expect("finite vertex");
+    }
+    for f in &scene.faces {
+        let added = b
+            .add_polygon(f.vertex_indices(), f.material, "scaled")
+            .expect("valid face");
+        assert_eq!(added, 1, "a face changed under scaling");
+    }
+    b.build().expect("scene")
+}
