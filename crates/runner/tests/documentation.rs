@@ -1,5 +1,5 @@
-//! The project's documentation resolves: every relative link in README.md and docs/*.md names a file that
-//! exists, and no source file cites design notes that are not in the repository (a reader of the code must be
+//! The project's documentation resolves: every relative link in README.md, CHANGELOG.md, docs/*.md and
+//! docs/journal/*.md names a file that exists, and no source file cites design notes that are not in the repository (a reader of the code must be
 //! able to follow every citation: papers are cited by author and year, the project's own notes live in docs/).
 
 use std::path::{Path, PathBuf};
@@ -27,15 +27,20 @@ fn link_targets(text: &str) -> Vec<String> {
 #[test]
 fn relative_links_in_the_readme_and_docs_resolve() {
     let root = workspace_root();
-    let mut files = vec![root.join("README.md")];
-    let mut docs: Vec<PathBuf> = std::fs::read_dir(root.join("docs"))
-        .expect("docs/ exists")
-        .map(|e| e.expect("readable docs/ entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "md"))
-        .collect();
-    docs.sort();
+    let mut files = vec![root.join("README.md"), root.join("CHANGELOG.md")];
+    let markdown_in = |dir: &str| -> Vec<PathBuf> {
+        let mut found: Vec<PathBuf> = std::fs::read_dir(root.join(dir))
+            .unwrap_or_else(|e| panic!("{dir}/ exists: {e}"))
+            .map(|e| e.expect("readable entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "md"))
+            .collect();
+        found.sort();
+        found
+    };
+    let docs = markdown_in("docs");
     assert!(docs.len() >= 4, "docs/ holds the design notes: {docs:?}");
     files.extend(docs);
+    files.extend(markdown_in("docs/journal"));
     let mut broken = Vec::new();
     for file in &files {
         let text = std::fs::read_to_string(file).expect("readable Markdown");
