@@ -1,6 +1,7 @@
 //! The project's documentation resolves: every relative link in README.md, CHANGELOG.md, docs/*.md and
-//! docs/journal/*.md names a file that exists, and no source file cites design notes that are not in the repository (a reader of the code must be
-//! able to follow every citation: papers are cited by author and year, the project's own notes live in docs/).
+//! docs/journal/*.md names a file that exists, and no source file cites design notes that are not in the
+//! repository (a reader of the code must be able to follow every citation: papers are cited by author and
+//! year, the project's own notes live in docs/).
 
 use std::path::{Path, PathBuf};
 
