@@ -583,7 +583,7 @@ impl<'a> FaceClusterSolver<'a> {
             rays,
         };
         s.index_new_nodes();
-        s.output.update(&s.engine, scene.face_count());
+        s.output.update(&s.engine);
         Ok(s)
     }
 
@@ -661,7 +661,7 @@ impl<'a> FaceClusterSolver<'a> {
     fn step(&mut self) -> Result<Step, SolveError> {
         let s = self.engine.step_counting_rays(self.accel, &mut self.rays)?;
         self.index_new_nodes();
-        self.output.update(&self.engine, self.scene.face_count());
+        self.output.update(&self.engine);
         self.face_fields = OnceLock::new();
         if let Some(g) = self.gather.take() {
             self.past_gather_work.0 += g.rays();

@@ -93,7 +93,6 @@
 //! self-link ([`Engine::add_link`]) and reuses the same refinement, gather, schedules and output.
 
 mod gather_rows;
-mod gouraud;
 mod hierarchy;
 mod link;
 mod locate;

@@ -1,6 +1,6 @@
 //! [`HierarchicalSolver`]: hierarchical radiosity over the quadtrees of a scene's input faces, driven through
-//! the [`Solver`] trait, and its [`Solution`]: radiosity constant per leaf, or vertex-interpolated
-//! ([`crate::gouraud`]), at any point of any face.
+//! the [`Solver`] trait, and its [`Solution`]: radiosity constant per leaf, vertex-interpolated or
+//! final-gathered (the shared answering layer, [`crate::output`]), at any point of any face.
 
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{FaceId, Rgb, Scene};
@@ -105,7 +105,7 @@ impl Solution for HierarchicalSolver<'_> {
 impl Solver for HierarchicalSolver<'_> {
     fn step(&mut self) -> Result<Step, SolveError> {
         let s = self.engine.step_counting_rays(self.accel, &mut self.rays)?;
-        self.output.update(&self.engine, self.scene.face_count());
+        self.output.update(&self.engine);
         Ok(s)
     }
 

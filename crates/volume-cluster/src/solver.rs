@@ -100,7 +100,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
             output,
             rays,
         };
-        s.output.update(&s.engine, scene.face_count());
+        s.output.update(&s.engine);
         Ok(s)
     }
 
@@ -151,7 +151,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
 
     fn step(&mut self) -> Result<Step, SolveError> {
         let s = self.engine.step_counting_rays(self.accel, &mut self.rays)?;
-        self.output.update(&self.engine, self.scene.face_count());
+        self.output.update(&self.engine);
         Ok(s)
     }
 }
