@@ -87,7 +87,7 @@ impl SurfaceOutput {
                 accel,
                 face,
                 point,
-                || engine.radiosity()[i as usize],
+                || engine.radiosity_at_leaf(i, point),
                 || None,
                 || leaf_elements(engine),
             );
@@ -105,7 +105,7 @@ impl SurfaceOutput {
             let q = param_coords(&root.polygon, point);
             return interpolate(&corners[..n], values, q);
         }
-        engine.radiosity()[i as usize]
+        engine.radiosity_at_leaf(i, point)
     }
 }
 
