@@ -5,6 +5,11 @@
 //! sealed, [`crate::open_share`]) and the transport's further exitance state,
 //! and the counters the runner reads. Refinement ([`crate::refine`]), gather rows (the crate's `gather_rows` module),
 //! solution ([`crate::push_pull`]) and the schedules ([`crate::schedule`]) are methods of [`Engine`].
+//!
+//! The engine's state is grouped by what reads and writes it: the tree (nodes, parents, children, roots, the
+//! node of each input face), the links (the transport's payloads by receiver, and what refinement remembers
+//! of them), the gather cache (rows, source rows and the marks that say what to rebuild), the schedule, and
+//! the solve state (radiosity, exitance, irradiance, open shares, coarse correction, convergence).
 
 use radlab_scene::{FaceId, Rgb, SolveError};
 

@@ -143,5 +143,5 @@ pub use patch_transport::{PatchKernel, reflect_scalar};
 pub use push_pull::LinkFilter;
 pub use solver::HierarchicalSolver;
 pub use transport::{
-    GatherAt, LinearState, LinkError, LinkPayload, NodeView, SourceFlux, Transport,
+    GatherAt, LinearState, LinkError, LinkPayload, NodeView, SourceFlux, SourceLight, Transport,
 };

@@ -7,8 +7,9 @@
 //!   over targets;
 //! - push: each node adds what its parent passes down (patches: the parent's irradiance), and a leaf's
 //!   radiosity is B = E + ρ ⊙ H (the transport's reflect);
-//! - pull: an inner node's radiosity is the area mean of its children's, B_p = Σ_c A_c B_c / A_p, so the
-//!   power a node sends is exactly the power of its leaves; the transport's exitance state adds up.
+//! - pull: the transport's [`Transport::pull`]; by default an inner node's radiosity is the area mean of its
+//!   children's, B_p = Σ_c A_c B_c / A_p, so the power a node sends is exactly the power of its leaves, and
+//!   the transport's exitance state adds up (a higher-order basis pulls by its two-scale relation).
 //!
 //! Where some leaf is partly sealed (a transport's open shares, [`crate::open_share`]), radiosity and
 //! irradiance are held over open parts: sources weight their leaves by o_y A_y F_{y→r}, a link's delivery is
@@ -246,9 +247,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .collect();
     }
 
-    /// Sets every inner node to the area mean of its children's radiosity and the sum of their exitance
-    /// (children follow parents in id order); with open shares, to the mean over their open areas
-    /// ([`Engine::pull_open`]).
+    /// Sets every inner node's radiosity and exitance from its children's by the transport's
+    /// [`Transport::pull`] (by default the area mean and the sum; children follow parents in id order); with
+    /// open shares, to the mean over their open areas ([`Engine::pull_open`]).
     pub(crate) fn pull(&self, b: &mut [Rgb], x: &mut [T::Exitance]) {
         if self.solve.has_open {
             return self.pull_open(b, x);

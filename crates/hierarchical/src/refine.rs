@@ -18,7 +18,7 @@ use crate::hierarchy::Engine;
 use crate::node::NodeKind;
 use crate::oracle::{Action, decide, light_weight};
 use crate::params::ErrorNorm;
-use crate::transport::{LinkPayload, Transport};
+use crate::transport::{LinkPayload, SourceLight, Transport};
 
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Whether root `r` carries light now (emits, or has received some).
@@ -191,8 +191,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                             self.solve.radiosity[l.source() as usize],
                             scale,
                         );
-                        let error =
-                            (!l.overlap()).then(|| self.kernel.link_error(oracle, recv, src, l, w));
+                        let error = (!l.overlap()).then(|| {
+                            let light = SourceLight {
+                                oracle,
+                                weight: w,
+                                radiosity: self.solve.radiosity[l.source() as usize],
+                                exitance: &self.solve.exitance[l.source() as usize],
+                                scale,
+                            };
+                            self.kernel.link_error(recv, src, l, &light)
+                        });
                         decide(
                             epsilon,
                             min_size,

@@ -126,6 +126,23 @@ pub struct LinkError {
     pub each_end: Option<f64>,
 }
 
+/// What the refinement knows of a link's source when it asks for the link's error
+/// ([`Transport::link_error`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SourceLight<'a, X> {
+    /// The oracle the parameters name.
+    pub oracle: Oracle,
+    /// The link's light weight: max over channels of ρ_r B_s over the scene's area-mean radiosity
+    /// ([`crate::light_weight`]; 0 when nothing is lit).
+    pub weight: f64,
+    /// The source's radiosity B_s (its mean).
+    pub radiosity: Rgb,
+    /// The source's exitance state (a higher-order basis: its coefficients beyond the mean).
+    pub exitance: &'a X,
+    /// The scene's area-mean radiosity (max channel), the light weight's scale.
+    pub scale: f64,
+}
+
 /// What a source sends along a link in one pass ([`Transport::emit`]) and a target receives through its
 /// coefficient ([`Transport::deliver`]): for a constant basis one radiosity per channel ([`Rgb`]), for a
 /// basis of M² functions per element its M² coefficients per channel.
@@ -170,18 +187,19 @@ pub trait Transport<N: NodeKind>: Sync {
     /// [`LinkPayload::overlap`] set: it carries nothing and the refinement must split it.
     fn link(&self, recv: &N, recv_id: u32, src: &N, src_id: u32) -> Option<Self::Link>;
 
-    /// The refinement oracle's estimate of `link`'s error (`recv ← src`), given its light weight. By
-    /// default the link's own ([`LinkPayload::error`]; for [`crate::Link`], the F, BF and variation oracles).
+    /// The refinement oracle's estimate of `link`'s error (`recv ← src`), from what the refinement knows
+    /// of the source's light (`light`). By default the link's own ([`LinkPayload::error`] under
+    /// `light.oracle` and `light.weight`; for [`crate::Link`], the F, BF and variation oracles). A
+    /// higher-order basis's oracle reads the source's coefficients there (its exitance).
     fn link_error(
         &self,
-        oracle: Oracle,
         recv: &N,
         src: &N,
         link: &Self::Link,
-        weight: f64,
+        light: &SourceLight<'_, Self::Exitance>,
     ) -> LinkError {
         let _ = (recv, src);
-        link.error(oracle, weight)
+        link.error(light.oracle, light.weight)
     }
 
     /// Where the link `recv ← src` is evaluated.
