@@ -458,6 +458,8 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
     /// Per unit flux: g (−d) for a vector link (b g (−d) and a g when its receiver straddles it), c n for a
     /// patch link's scalar c.
     type Coefficient = LinkCoefficient;
+    type Link = Link;
+    type Flux = Rgb;
 
     fn may_interact(&self, _recv: &FaceNode<'a>, _src: &FaceNode<'a>) -> bool {
         true
@@ -699,6 +701,14 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         let (d, _) = centroid_geometry(r.centroid(), src.centroid());
         let fit = bound_direction(r, src).map_or(CosineFit::FACING, |d_c| cosine_fit(src, d_c));
         fit.sent(&x[s], b[s] * src.area(), d)
+    }
+
+    fn weighs_source_leaves(&self, recv: &FaceNode<'a>, link: &Link) -> bool {
+        PatchKernel::sends_source_radiosity(link) && recv.patch().is_some()
+    }
+
+    fn source_leaf_weight(&self, leaf: &FaceNode<'a>, recv: &FaceNode<'a>) -> Option<f64> {
+        Some(self.patches.source_weight(leaf.patch()?, recv.patch()?))
     }
 
     fn deliver(&self, h: &mut ClampedIrradiance, c: &LinkCoefficient, flux: Rgb) {

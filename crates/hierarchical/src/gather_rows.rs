@@ -15,7 +15,7 @@
 //!   furnace B = E/(1 − ρ) holds at any ρ.
 //!
 //! The source side mirrors the leaf gather: a link r ← s whose source is an inner node (of patches, toward a
-//! patch, and sending radiosity: [`Transport::sends_source_radiosity`]) sends Σ_y w_y B_y / Σ_y w_y over the
+//! patch, and sending radiosity: [`Transport::weighs_source_leaves`]) sends Σ_y w_y B_y / Σ_y w_y over the
 //! leaves y below s, w_y = A_y F_{y→r} by y's own Gauss points, so each source leaf's power is divided among
 //! the receivers by how much of it each sees: Σ_t A_t F_{t→s} · A_y F_{y→r} / (A_s F_{s→r}) = A_y F_{y→r} up
 //! to quadrature, since both sides integrate the same A_r F_rs = A_s F_sr. Rows and columns of the discrete
@@ -36,9 +36,8 @@
 use rayon::prelude::*;
 
 use crate::hierarchy::{Engine, NONE, RowEntry, SourceWeight};
-use crate::link::{Link, kernel_mean};
 use crate::node::NodeKind;
-use crate::transport::{GatherAt, Transport};
+use crate::transport::{GatherAt, LinkPayload, Transport};
 
 /// Where the descending links of changed receivers land this rebuild, found top down from each receiver
 /// (through the clusters that pass them on, stopping at those that resolve them and at input faces), so a
@@ -63,18 +62,18 @@ impl Frontier {
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The nodes where receiver `a`'s descending link `l` (index `k`) is evaluated: the shallowest nodes
     /// strictly below `a` that the transport resolves it at, or the input faces where none on the way does.
-    fn landings(&self, a: u32, k: u32, l: &Link, out: &mut Vec<(u32, u32, u32)>) {
-        let src = &self.nodes[l.source as usize];
-        let (first, count) = self.children[a as usize];
+    fn landings(&self, a: u32, k: u32, l: &T::Link, out: &mut Vec<(u32, u32, u32)>) {
+        let src = &self.tree.nodes[l.source() as usize];
+        let (first, count) = self.tree.children[a as usize];
         let mut stack: Vec<u32> = (first..first + count).rev().collect();
         while let Some(c) = stack.pop() {
-            let node = &self.nodes[c as usize];
+            let node = &self.tree.nodes[c as usize];
             if self.is_face_target(c)
                 || (node.face().is_none() && self.kernel.resolves(node, src, l))
             {
                 out.push((c, a, k));
             } else if node.face().is_none() {
-                let (first, count) = self.children[c as usize];
+                let (first, count) = self.tree.children[c as usize];
                 stack.extend((first..first + count).rev());
             }
         }
@@ -82,9 +81,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     /// Whether node `t` is the input-face target of [`GatherAt::Faces`] links from above it.
     fn is_face_target(&self, t: u32) -> bool {
-        let p = self.parent[t as usize];
-        self.nodes[t as usize].face().is_some()
-            && (p == NONE || self.nodes[p as usize].face().is_none())
+        let p = self.tree.parent[t as usize];
+        self.tree.nodes[t as usize].face().is_some()
+            && (p == NONE || self.tree.nodes[p as usize].face().is_none())
     }
 
     /// The row of target `t`: its own links, and the links of its ancestors that distribute to it. Entries
@@ -101,10 +100,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         descend: &Frontier,
         reuse: &[bool],
     ) -> (Vec<RowEntry<T::Coefficient>>, u64) {
-        let node = &self.nodes[t as usize];
-        let leaf = self.children[t as usize].1 == 0;
+        let node = &self.tree.nodes[t as usize];
+        let leaf = self.tree.children[t as usize].1 == 0;
         let within_face = node.face().is_some();
-        let renew = self.dirty[t as usize];
+        let renew = self.cache.dirty[t as usize];
         let descends = |r: u32, k: u32| {
             below[r as usize]
                 .as_ref()
@@ -113,7 +112,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let mut row: Vec<RowEntry<T::Coefficient>> = old
             .iter()
             .filter(|&&(r, k, _)| {
-                !self.dirty[r as usize]
+                !self.cache.dirty[r as usize]
                     && if descends(r, k) {
                         !descend.regrown[r as usize]
                     } else {
@@ -126,11 +125,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let mut kept: Vec<(u32, u32, T::Coefficient)> = old
             .iter()
             .filter(|(r, _, _)| {
-                (renew || self.dirty[*r as usize] || descend.regrown[*r as usize])
+                (renew || self.cache.dirty[*r as usize] || descend.regrown[*r as usize])
                     && reuse[*r as usize]
             })
             .filter_map(|&(r, k, c)| {
-                let s = *self.row_sources.get(r as usize)?.get(k as usize)?;
+                let s = *self.cache.row_sources.get(r as usize)?.get(k as usize)?;
                 Some((r, s, c))
             })
             .collect();
@@ -144,61 +143,71 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 .map(|i| kept[i].2)
         };
         let mut evaluations = 0;
-        let mut evaluate = |row: &mut Vec<RowEntry<T::Coefficient>>, a: u32, k: u32, l: &Link| {
-            let c = find(a, l.source).unwrap_or_else(|| {
-                evaluations += 1;
-                self.kernel
-                    .coefficient(node, &self.nodes[l.source as usize], l, false)
-            });
-            row.push((a, k, c));
-        };
+        let mut evaluate =
+            |row: &mut Vec<RowEntry<T::Coefficient>>, a: u32, k: u32, l: &T::Link| {
+                let c = find(a, l.source()).unwrap_or_else(|| {
+                    evaluations += 1;
+                    self.kernel
+                        .coefficient(node, &self.tree.nodes[l.source() as usize], l, false)
+                });
+                row.push((a, k, c));
+            };
         // Room for every entry the loops below may add, so that the row is not copied as it grows.
         let face_target = self.is_face_target(t);
         let mut room = descend.at(t).len();
         if renew {
-            room += self.links[t as usize].len();
+            room += self.links.by_receiver[t as usize].len();
         }
         if leaf || face_target {
-            let mut a = self.parent[t as usize];
+            let mut a = self.tree.parent[t as usize];
             while a != NONE {
-                if below[a as usize].is_some() && (renew || self.dirty[a as usize]) {
-                    room += self.links[a as usize].len();
+                if below[a as usize].is_some() && (renew || self.cache.dirty[a as usize]) {
+                    room += self.links.by_receiver[a as usize].len();
                 }
-                a = self.parent[a as usize];
+                a = self.tree.parent[a as usize];
             }
         }
         row.reserve_exact(room);
         // Descending links of changed receivers above t that land on t.
         for &(_, a, k) in descend.at(t) {
-            evaluate(&mut row, a, k, &self.links[a as usize][k as usize]);
+            evaluate(
+                &mut row,
+                a,
+                k,
+                &self.links.by_receiver[a as usize][k as usize],
+            );
         }
         if renew {
-            for (k, l) in self.links[t as usize].iter().enumerate() {
-                if l.overlap {
+            for (k, l) in self.links.by_receiver[t as usize].iter().enumerate() {
+                if l.overlap() {
                     continue;
                 }
-                let src = &self.nodes[l.source as usize];
+                let src = &self.tree.nodes[l.source() as usize];
                 let here = match self.kernel.gather_at(node, src) {
                     GatherAt::Receiver => true,
                     GatherAt::Faces | GatherAt::Descend => within_face,
                     GatherAt::Leaves => leaf,
                 };
                 if here {
-                    let c = find(t, l.source)
+                    let c = find(t, l.source())
                         .unwrap_or_else(|| self.kernel.coefficient(node, src, l, true));
                     row.push((t, k as u32, c));
                 }
             }
         }
         if leaf || face_target {
-            let mut a = self.parent[t as usize];
+            let mut a = self.tree.parent[t as usize];
             while a != NONE {
                 if let Some(modes) = &below[a as usize]
-                    && (renew || self.dirty[a as usize])
+                    && (renew || self.cache.dirty[a as usize])
                 {
-                    let recv = &self.nodes[a as usize];
-                    for ((k, l), mode) in self.links[a as usize].iter().enumerate().zip(modes) {
-                        let here = !l.overlap
+                    let recv = &self.tree.nodes[a as usize];
+                    for ((k, l), mode) in self.links.by_receiver[a as usize]
+                        .iter()
+                        .enumerate()
+                        .zip(modes)
+                    {
+                        let here = !l.overlap()
                             && match mode {
                                 GatherAt::Receiver | GatherAt::Descend => false,
                                 GatherAt::Faces => face_target && recv.face().is_none(),
@@ -209,7 +218,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                         }
                     }
                 }
-                a = self.parent[a as usize];
+                a = self.tree.parent[a as usize];
             }
         }
         // A fixed order whatever was kept: by receiver, then link.
@@ -219,30 +228,30 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     }
 
     /// The leaves below the source of `recv`'s link `l` with their normalised weights in what the link
-    /// sends, w_y = A_y F_{y→r} / Σ, and the number of kernel evaluations; empty when the source is a leaf,
-    /// the link sends something else, an end is not a patch, or no leaf sees the receiver.
-    fn source_row(&self, recv: u32, l: &Link) -> (Vec<SourceWeight>, u64) {
+    /// sends, w_y / Σ w (w_y the transport's [`Transport::source_leaf_weight`], for patches A_y F_{y→r}),
+    /// and the number of kernel evaluations; empty when the source is a leaf, the link sends something
+    /// else, a leaf cannot be weighed, or no leaf sees the receiver.
+    fn source_row(&self, recv: u32, l: &T::Link) -> (Vec<SourceWeight>, u64) {
         if !self.may_need_source_row(recv, l) {
             return (Vec::new(), 0);
         }
-        let Some(r) = self.nodes[recv as usize].patch() else {
-            return (Vec::new(), 0);
-        };
-        let m = self.params.quadrature;
+        let r = &self.tree.nodes[recv as usize];
         let mut out = Vec::new();
-        let mut stack = vec![l.source];
+        let mut stack = vec![l.source()];
         let (mut total, mut evaluations) = (0.0, 0);
         while let Some(j) = stack.pop() {
-            let (first, count) = self.children[j as usize];
+            let (first, count) = self.tree.children[j as usize];
             if count > 0 {
                 stack.extend((first..first + count).rev());
                 continue;
             }
-            let Some(y) = self.nodes[j as usize].patch() else {
+            let Some(w) = self
+                .kernel
+                .source_leaf_weight(&self.tree.nodes[j as usize], r)
+            else {
                 return (Vec::new(), evaluations);
             };
             evaluations += 1;
-            let w = y.area * kernel_mean(y, r, m);
             if w > 0.0 && w.is_finite() {
                 total += w;
                 out.push((j, w));
@@ -255,13 +264,14 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         (row, evaluations)
     }
 
-    /// Whether `recv`'s link `l` can have a source row: it sends its source's radiosity, from an inner node
-    /// (of patches, checked in [`Engine::source_row`]) to a patch.
-    fn may_need_source_row(&self, recv: u32, l: &Link) -> bool {
-        !l.overlap
-            && self.children[l.source as usize].1 != 0
-            && self.kernel.sends_source_radiosity(l)
-            && self.nodes[recv as usize].patch().is_some()
+    /// Whether `recv`'s link `l` can have a source row: its source is an inner node and the transport
+    /// weighs its leaves ([`Transport::weighs_source_leaves`]).
+    fn may_need_source_row(&self, recv: u32, l: &T::Link) -> bool {
+        !l.overlap()
+            && self.tree.children[l.source() as usize].1 != 0
+            && self
+                .kernel
+                .weighs_source_leaves(&self.tree.nodes[recv as usize], l)
     }
 
     /// Rebuilds the source rows of receivers whose links changed, and of links whose source's subtree
@@ -271,32 +281,33 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// faces under volume clusters. Such a receiver's rows are built afresh once one of its links can have
     /// one, which needs a changed link or a split source, both of which rebuild the row anyway.
     fn rebuild_source_rows(&mut self, grown: &[bool]) {
-        let n = self.nodes.len();
+        let n = self.tree.nodes.len();
         let todo: Vec<u32> = (0..n as u32)
             .filter(|&r| {
-                self.dirty[r as usize]
-                    || self.links[r as usize]
+                self.cache.dirty[r as usize]
+                    || self.links.by_receiver[r as usize]
                         .iter()
-                        .any(|l| grown[l.source as usize])
+                        .any(|l| grown[l.source() as usize])
             })
             .collect();
         let built: Vec<(Vec<Vec<SourceWeight>>, u64)> = todo
             .par_iter()
             .map(|&r| {
-                if !self.links[r as usize]
+                if !self.links.by_receiver[r as usize]
                     .iter()
                     .any(|l| self.may_need_source_row(r, l))
                 {
                     return (Vec::new(), 0);
                 }
-                let old = &self.source_rows[r as usize];
-                let renew = self.dirty[r as usize] || old.len() != self.links[r as usize].len();
+                let old = &self.cache.source_rows[r as usize];
+                let renew = self.cache.dirty[r as usize]
+                    || old.len() != self.links.by_receiver[r as usize].len();
                 let mut evaluations = 0;
-                let rows = self.links[r as usize]
+                let rows = self.links.by_receiver[r as usize]
                     .iter()
                     .enumerate()
                     .map(|(k, l)| {
-                        if !renew && !grown[l.source as usize] {
+                        if !renew && !grown[l.source() as usize] {
                             return old[k].clone();
                         }
                         let (w, e) = self.source_row(r, l);
@@ -308,22 +319,22 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             })
             .collect();
         for (r, (rows, evaluations)) in todo.into_iter().zip(built) {
-            self.source_rows[r as usize] = rows;
+            self.cache.source_rows[r as usize] = rows;
             self.form_factors += evaluations;
         }
     }
 
     /// Rebuilds the rows of targets whose path has a changed node; clears the marks.
     pub(crate) fn rebuild_rows(&mut self) {
-        let n = self.nodes.len();
+        let n = self.tree.nodes.len();
         // Nodes below which a node was split since the last build, and (`regrown`) a node above the faces
         // (which may move where descending links from above it land).
-        let mut grown = std::mem::take(&mut self.split_since);
+        let mut grown = std::mem::take(&mut self.cache.split_since);
         let mut regrown: Vec<bool> = (0..n)
-            .map(|i| grown[i] && self.nodes[i].face().is_none())
+            .map(|i| grown[i] && self.tree.nodes[i].face().is_none())
             .collect();
         for i in (0..n).rev() {
-            let p = self.parent[i];
+            let p = self.tree.parent[i];
             if p != NONE {
                 grown[p as usize] |= grown[i];
                 regrown[p as usize] |= regrown[i];
@@ -331,23 +342,23 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         }
         self.rebuild_source_rows(&grown);
         grown.iter_mut().for_each(|g| *g = false);
-        self.split_since = grown;
+        self.cache.split_since = grown;
         // Where each link is evaluated, for the nodes with links evaluated below them (asked once per
         // rebuild, not at every target below).
         let below: Vec<Option<Vec<GatherAt>>> = (0..n)
             .into_par_iter()
             .map(|a| {
-                let modes: Vec<GatherAt> = self.links[a]
+                let modes: Vec<GatherAt> = self.links.by_receiver[a]
                     .iter()
                     .map(|l| {
                         self.kernel
-                            .gather_at(&self.nodes[a], &self.nodes[l.source as usize])
+                            .gather_at(&self.tree.nodes[a], &self.tree.nodes[l.source() as usize])
                     })
                     .collect();
-                let distributes = self.links[a]
+                let distributes = self.links.by_receiver[a]
                     .iter()
                     .zip(&modes)
-                    .any(|(l, m)| !l.overlap && *m != GatherAt::Receiver);
+                    .any(|(l, m)| !l.overlap() && *m != GatherAt::Receiver);
                 distributes.then_some(modes)
             })
             .collect();
@@ -355,16 +366,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         for (a, r) in regrown.iter_mut().enumerate() {
             *r = *r
                 && below[a].as_ref().is_some_and(|modes| {
-                    self.links[a]
+                    self.links.by_receiver[a]
                         .iter()
                         .zip(modes)
-                        .any(|(l, m)| !l.overlap && *m == GatherAt::Descend)
+                        .any(|(l, m)| !l.overlap() && *m == GatherAt::Descend)
                 })
         }
         // A node is stale if it or an ancestor is dirty or regrown (parents precede children).
-        let mut stale: Vec<bool> = (0..n).map(|i| self.dirty[i] || regrown[i]).collect();
+        let mut stale: Vec<bool> = (0..n).map(|i| self.cache.dirty[i] || regrown[i]).collect();
         for i in 0..n {
-            let p = self.parent[i];
+            let p = self.tree.parent[i];
             if p != NONE && stale[p as usize] {
                 stale[i] = true;
             }
@@ -378,25 +389,32 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let reuse: Vec<bool> = (0..n)
             .into_par_iter()
             .map(|a| {
-                let Some(prev) = self.row_sources.get(a) else {
+                let Some(prev) = self.cache.row_sources.get(a) else {
                     return false;
                 };
-                let mut now: Vec<u32> = self.links[a].iter().map(|l| l.source).collect();
-                !self.dirty[a] || (distinct(&mut prev.clone()) && distinct(&mut now))
+                let mut now: Vec<u32> = self.links.by_receiver[a]
+                    .iter()
+                    .map(|l| l.source())
+                    .collect();
+                !self.cache.dirty[a] || (distinct(&mut prev.clone()) && distinct(&mut now))
             })
             .collect();
         // Where the descending links of changed receivers land.
         let mut landings: Vec<(u32, u32, u32)> = (0..n as u32)
             .into_par_iter()
             .filter(|&a| {
-                (self.dirty[a as usize] || regrown[a as usize])
-                    && self.nodes[a as usize].face().is_none()
+                (self.cache.dirty[a as usize] || regrown[a as usize])
+                    && self.tree.nodes[a as usize].face().is_none()
             })
             .flat_map_iter(|a| {
                 let mut out = Vec::new();
                 if let Some(modes) = &below[a as usize] {
-                    for ((k, l), mode) in self.links[a as usize].iter().enumerate().zip(modes) {
-                        if !l.overlap && *mode == GatherAt::Descend {
+                    for ((k, l), mode) in self.links.by_receiver[a as usize]
+                        .iter()
+                        .enumerate()
+                        .zip(modes)
+                    {
+                        if !l.overlap() && *mode == GatherAt::Descend {
                             self.landings(a, k as u32, l, &mut out);
                         }
                     }
@@ -409,18 +427,21 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let todo: Vec<u32> = (0..n as u32).filter(|&i| stale[i as usize]).collect();
         let built: Vec<(Vec<RowEntry<T::Coefficient>>, u64)> = todo
             .par_iter()
-            .map(|&t| self.build_row(t, &self.rows[t as usize], &below, &descend, &reuse))
+            .map(|&t| self.build_row(t, &self.cache.rows[t as usize], &below, &descend, &reuse))
             .collect();
         for (t, (row, evaluations)) in todo.into_iter().zip(built) {
-            self.rows[t as usize] = row;
+            self.cache.rows[t as usize] = row;
             self.form_factors += evaluations;
         }
-        self.row_sources.resize(n, Vec::new());
+        self.cache.row_sources.resize(n, Vec::new());
         for a in 0..n {
-            if self.dirty[a] {
-                self.row_sources[a] = self.links[a].iter().map(|l| l.source).collect();
+            if self.cache.dirty[a] {
+                self.cache.row_sources[a] = self.links.by_receiver[a]
+                    .iter()
+                    .map(|l| l.source())
+                    .collect();
             }
         }
-        self.dirty.iter_mut().for_each(|d| *d = false);
+        self.cache.dirty.iter_mut().for_each(|d| *d = false);
     }
 }

@@ -82,15 +82,36 @@
 //! - The `variation` oracle sees variation only through its samples; with `quadrature = 1` it would see none
 //!   (refused).
 
-//! ## Extending: other node kinds
+//! ## Extending: node kinds and bases
 //! The machinery is generic: [`Engine`] refines, gathers, pushes, pulls and schedules over any [`NodeKind`]
 //! (area, bound, orientation, projected area, reflectance, emission, split) with light moved by any
-//! [`Transport`]: what a link transfers, where it is evaluated ([`GatherAt`]: at the receiver, at each input
-//! face below it, or at each leaf), how a child inherits its parent's irradiance and how a leaf reflects it,
-//! with the state types (irradiance, exitance) the transport chooses. The patch solver is
-//! [`HierarchicalSolver`] = `Engine<Patch, PatchKernel>` plus the shared output layer ([`SurfaceOutput`]);
-//! radlab-volume-cluster supplies cluster nodes and three cluster transfers, starts the engine from one root
-//! self-link ([`Engine::add_link`]) and reuses the same refinement, gather, schedules and output.
+//! [`Transport`]. The transport owns the physics and the basis; the engine owns the hierarchy and its state
+//! (tree, links, gather cache, schedule, solve state). A transport says
+//!
+//! - what a link carries ([`Transport::Link`], a [`LinkPayload`]: its source, whether its ends overlap, its
+//!   error estimate) and how it is made ([`Transport::link`]); patches and clusters carry the form-factor
+//!   [`Link`];
+//! - how the refinement estimates a link's error ([`Transport::link_error`]; by default the payload's own,
+//!   for [`Link`] the `f`, `bf` and `variation` oracles);
+//! - what a source sends ([`Transport::Flux`], [`Transport::emit`]; a constant basis sends one radiosity per
+//!   channel), where the link is evaluated ([`GatherAt`]: at the receiver, at each input face below it, or
+//!   at each leaf), its coefficient there and how a target receives it ([`Transport::deliver`]), and whether
+//!   an inner source sends its leaves' radiosity weighted by how much each sees the receiver
+//!   ([`Transport::source_leaf_weight`]);
+//! - how a child inherits its parent's irradiance ([`Transport::push`]), how a leaf reflects it
+//!   ([`Transport::reflect`]) and how a parent is pulled from its children ([`Transport::pull`]; by
+//!   default the area mean of radiosity and the sum of the exitance state);
+//! - how a leaf is evaluated at a point ([`Transport::radiosity_at`], read through
+//!   [`Engine::radiosity_at_leaf`]; by default its mean, a constant element).
+//!
+//! A higher-order basis (M² coefficients per element, M⁴ per link) chooses its payload, flux, irradiance
+//! and exitance types and overrides pull and point evaluation; the crate's test
+//! `tests/transport_contract.rs` shows a new node kind on the default hooks and a piecewise-linear basis
+//! with a four-coefficient link, both against closed forms. The patch solver is [`HierarchicalSolver`] =
+//! `Engine<Patch, PatchKernel>` (the patch physics, kernel quadrature and source weights, in
+//! [`PatchKernel`]) plus the shared output layer ([`SurfaceOutput`]); radlab-volume-cluster supplies cluster
+//! nodes and three cluster transfers, starts the engine from one root self-link ([`Engine::add_link`]) and
+//! reuses the same refinement, gather, schedules and output.
 
 mod gather_rows;
 mod hierarchy;
@@ -101,6 +122,7 @@ mod open_share;
 mod oracle;
 pub mod output;
 mod params;
+mod patch_transport;
 mod push_pull;
 mod refine;
 mod schedule;
@@ -108,7 +130,7 @@ mod solver;
 pub mod transport;
 
 pub use hierarchy::Engine;
-pub use link::{Link, PatchKernel, link_stream, reflect_scalar};
+pub use link::{Link, link_stream};
 pub use node::{Bound, LATTICE, MAX_LEVEL, NodeKind, Patch};
 pub use oracle::{Action, decide, estimate, light_weight};
 pub use output::SurfaceOutput;
@@ -116,6 +138,9 @@ pub use params::{
     DEFAULT_RECONSTRUCTION, ErrorNorm, Gather, HierarchicalParams, MIN_ELEMENT_SIZE_REL, Oracle,
     Schedule,
 };
+pub use patch_transport::{PatchKernel, reflect_scalar};
 pub use push_pull::LinkFilter;
 pub use solver::HierarchicalSolver;
-pub use transport::{GatherAt, LinearState, NodeView, Transport};
+pub use transport::{
+    GatherAt, LinearState, LinkError, LinkPayload, NodeView, SourceFlux, SourceLight, Transport,
+};

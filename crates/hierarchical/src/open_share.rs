@@ -37,69 +37,72 @@ use radlab_scene::Rgb;
 use rayon::prelude::*;
 
 use crate::hierarchy::Engine;
-use crate::link::Link;
 use crate::node::NodeKind;
-use crate::transport::{LinearState, NodeView, Transport};
+use crate::transport::{LinearState, LinkPayload, NodeView, SourceFlux, Transport};
 
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Estimates the open shares of leaves that have none yet (in parallel, each from its own random
     /// stream), pulls them up as area means, and sets each link's receiver gain 1/ō_l and each leaf's cap.
     /// The rows must be current.
     pub(crate) fn update_open_shares(&mut self) {
-        let n = self.nodes.len();
+        let n = self.tree.nodes.len();
         let todo: Vec<u32> = (0..n as u32)
-            .filter(|&i| self.children[i as usize].1 == 0 && self.open_raw[i as usize].is_nan())
+            .filter(|&i| {
+                self.tree.children[i as usize].1 == 0 && self.solve.open_raw[i as usize].is_nan()
+            })
             .collect();
         let found: Vec<f64> = todo
             .par_iter()
             .map(|&i| {
                 let o = self
                     .kernel
-                    .open_share(&self.nodes[i as usize])
+                    .open_share(&self.tree.nodes[i as usize])
                     .unwrap_or(1.0);
                 if (0.0..=1.0).contains(&o) { o } else { 1.0 }
             })
             .collect();
         for (i, o) in todo.into_iter().zip(found) {
-            self.open_raw[i as usize] = o;
+            self.solve.open_raw[i as usize] = o;
         }
-        self.has_open = (0..n).any(|i| self.children[i].1 == 0 && self.open_raw[i] < 1.0);
-        self.link_gain.clear();
-        self.row_cap.clear();
-        if !self.has_open {
-            self.open.iter_mut().for_each(|o| *o = 1.0);
+        self.solve.has_open =
+            (0..n).any(|i| self.tree.children[i].1 == 0 && self.solve.open_raw[i] < 1.0);
+        self.solve.link_gain.clear();
+        self.solve.row_cap.clear();
+        if !self.solve.has_open {
+            self.solve.open.iter_mut().for_each(|o| *o = 1.0);
             return;
         }
         for i in (0..n).rev() {
-            let (first, count) = self.children[i];
+            let (first, count) = self.tree.children[i];
             if count == 0 {
-                self.open[i] = self.open_raw[i];
+                self.solve.open[i] = self.solve.open_raw[i];
                 continue;
             }
             let (mut sum, mut area) = (0.0, 0.0);
             for c in first..first + count {
-                let a = self.nodes[c as usize].area();
-                sum += a * self.open[c as usize];
+                let a = self.tree.nodes[c as usize].area();
+                sum += a * self.solve.open[c as usize];
                 area += a;
             }
-            self.open[i] = if area > 0.0 { sum / area } else { 1.0 };
+            self.solve.open[i] = if area > 0.0 { sum / area } else { 1.0 };
         }
         // ō_l from every row entry, in target order (sequential: the same sums on any thread count).
         let mut sums: Vec<Vec<(f64, f64)>> = self
             .links
+            .by_receiver
             .iter()
             .map(|ls| vec![(0.0, 0.0); ls.len()])
             .collect();
-        for (t, row) in self.rows.iter().enumerate() {
-            let a = self.nodes[t].area();
+        for (t, row) in self.cache.rows.iter().enumerate() {
+            let a = self.tree.nodes[t].area();
             for (r, k, c) in row {
                 let w = a * self.kernel.coefficient_weight(c);
                 let s = &mut sums[*r as usize][*k as usize];
-                s.0 += w * self.open[t];
+                s.0 += w * self.solve.open[t];
                 s.1 += w;
             }
         }
-        self.link_gain = sums
+        self.solve.link_gain = sums
             .into_iter()
             .map(|ls| {
                 ls.into_iter()
@@ -116,10 +119,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             })
             .collect();
         let rows = self.unit_gather(true);
-        self.row_cap = (0..n)
+        self.solve.row_cap = (0..n)
             .map(|i| {
                 let m = rows[i].max_element();
-                if self.children[i].1 == 0 && m > 1.0 {
+                if self.tree.children[i].1 == 0 && m > 1.0 {
                     1.0 / m
                 } else {
                     1.0
@@ -137,31 +140,32 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         x: &[T::Exitance],
         r: usize,
         k: usize,
-        l: &Link,
-    ) -> Rgb {
-        let s = l.source as usize;
-        let j = match self.source_rows[r].get(k) {
+        l: &T::Link,
+    ) -> T::Flux {
+        let s = l.source() as usize;
+        let j = match self.cache.source_rows[r].get(k) {
             Some(ws) if !ws.is_empty() => {
                 let (sum, weight) = ws.iter().fold((Rgb::ZERO, 0.0), |(sum, d), (y, w)| {
-                    let wo = *w * self.open[*y as usize];
+                    let wo = *w * self.solve.open[*y as usize];
                     (sum + wo * b[*y as usize], d + wo)
                 });
-                if weight > 0.0 {
+                T::Flux::from(if weight > 0.0 {
                     sum / weight
                 } else {
                     Rgb::ZERO
-                }
+                })
             }
-            _ if self.open[s] == 0.0 => Rgb::ZERO,
+            _ if self.solve.open[s] == 0.0 => T::Flux::default(),
             _ => self.kernel.emit(view, b, x, r as u32, l),
         };
         let gain = self
+            .solve
             .link_gain
             .get(r)
             .and_then(|g| g.get(k))
             .copied()
             .unwrap_or(1.0);
-        j * gain
+        j.scaled(gain)
     }
 
     /// A leaf's radiosity and exitance from its gathered irradiance `h`, capped where its row sum with the
@@ -173,12 +177,12 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         h: &T::Irradiance,
         with_emission: bool,
     ) -> (Rgb, T::Exitance) {
-        if self.has_open && self.open[i] == 0.0 {
+        if self.solve.has_open && self.solve.open[i] == 0.0 {
             return self
                 .kernel
                 .reflect(node, &T::Irradiance::default(), with_emission);
         }
-        match self.row_cap.get(i) {
+        match self.solve.row_cap.get(i) {
             Some(&cap) if cap != 1.0 => {
                 let mut scaled = T::Irradiance::default();
                 scaled.add_scaled(Rgb::splat(cap), h);
@@ -192,8 +196,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// their open areas, Σ o_c A_c B_c / Σ o_c A_c (what it sends from its open part; the area mean where
     /// every child is sealed), its exitance the sum of theirs.
     pub(crate) fn pull_open(&self, b: &mut [Rgb], x: &mut [T::Exitance]) {
-        for i in (0..self.nodes.len()).rev() {
-            let (first, count) = self.children[i];
+        for i in (0..self.tree.nodes.len()).rev() {
+            let (first, count) = self.tree.children[i];
             if count == 0 {
                 continue;
             }
@@ -202,9 +206,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             let mut xs = T::Exitance::default();
             for c in first..first + count {
                 let c = c as usize;
-                let a = self.nodes[c].area();
-                open_sum += a * self.open[c] * b[c];
-                open_area += a * self.open[c];
+                let a = self.tree.nodes[c].area();
+                open_sum += a * self.solve.open[c] * b[c];
+                open_area += a * self.solve.open[c];
                 sum += a * b[c];
                 area += a;
                 xs.add_scaled(Rgb::ONE, &x[c]);

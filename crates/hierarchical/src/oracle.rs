@@ -1,6 +1,7 @@
 //! Refinement oracles and the choice of which end of a link to split (Hanrahan, Salzman & Aupperle 1991; Stamminger et al. 1997).
 //!
-//! The estimate e of a link r ← s is, by [`Oracle`]:
+//! The estimate e of a link r ← s is its transport's ([`crate::Transport::link_error`]); for the form-factor
+//! [`Link`] of patches and clusters it is, by [`Oracle`]:
 //!
 //! - F:         e = max(F_rs, F_sr)                      (Hanrahan, Salzman & Aupperle 1991, "F refinement")
 //! - BF:        e = max(F_rs, F_sr) · max_c(ρ_r B_s)/B̄   (HSA91, "BF refinement"; B̄ the scene's area-mean radiosity)
@@ -20,6 +21,7 @@
 use crate::link::{Link, direction};
 use crate::node::NodeKind;
 use crate::params::Oracle;
+use crate::transport::LinkError;
 use radlab_scene::Rgb;
 
 /// What to do with one link in a refinement pass.
@@ -50,7 +52,7 @@ pub fn light_weight(reflectance: Rgb, source_radiosity: Rgb, scale: f64) -> f64 
     }
 }
 
-/// The oracle's estimate e for a link, given its light weight (ignored by [`Oracle::F`]).
+/// The oracle's estimate e for a form-factor link, given its light weight (ignored by [`Oracle::F`]).
 pub fn estimate(oracle: Oracle, link: &Link, weight: f64) -> f64 {
     let f = link.f_recv.max(link.f_src) as f64;
     match oracle {
@@ -60,23 +62,21 @@ pub fn estimate(oracle: Oracle, link: &Link, weight: f64) -> f64 {
     }
 }
 
-/// Decides the fate of link `recv ← src`. `norm` multiplies the estimate: 1 for the radiosity norm,
-/// A_r / A_scene for the power norm ([`crate::ErrorNorm`]).
-#[allow(clippy::too_many_arguments)]
+/// Decides the fate of link `recv ← src`: `error` is the transport's estimate of its error
+/// ([`crate::Transport::link_error`]), `None` for a link whose ends overlap. `norm` multiplies the estimate:
+/// 1 for the radiosity norm, A_r / A_scene for the power norm ([`crate::ErrorNorm`]).
 pub fn decide<N: NodeKind>(
-    oracle: Oracle,
     epsilon: f64,
     min_size: f64,
     recv: &N,
     src: &N,
     self_link: bool,
-    link: &Link,
-    weight: f64,
+    error: Option<LinkError>,
     norm: f64,
 ) -> Action {
     let can_r = recv.can_split(min_size);
     let can_s = src.can_split(min_size);
-    if link.overlap {
+    let Some(error) = error else {
         return match (self_link, can_r, can_s) {
             (true, true, _) => Action::SplitBoth,
             (true, false, _) | (false, false, false) => Action::Keep,
@@ -90,8 +90,8 @@ pub fn decide<N: NodeKind>(
                 }
             }
         };
-    }
-    let e = estimate(oracle, link, weight) * norm;
+    };
+    let e = error.estimate * norm;
     if e.is_nan() || e <= epsilon {
         return Action::Keep;
     }
@@ -105,9 +105,7 @@ pub fn decide<N: NodeKind>(
     if can_s && !src.sends_own_emission() && src.emission().max_element() > 0.0 {
         return Action::SplitSource;
     }
-    let w = if oracle == Oracle::F { 1.0 } else { weight };
-    let both =
-        oracle != Oracle::Variation && (link.f_recv.min(link.f_src) as f64) * w * norm > epsilon;
+    let both = error.each_end.is_some_and(|m| m * norm > epsilon);
     if both && can_r && can_s {
         return Action::SplitBoth;
     }

@@ -85,7 +85,7 @@ impl SurfaceOutput {
             accel,
             face,
             point,
-            || engine.radiosity()[i as usize],
+            || engine.radiosity_at_leaf(i, point),
             || {
                 self.element_index
                     .get(i as usize)

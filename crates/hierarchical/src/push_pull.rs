@@ -7,8 +7,9 @@
 //!   over targets;
 //! - push: each node adds what its parent passes down (patches: the parent's irradiance), and a leaf's
 //!   radiosity is B = E + ρ ⊙ H (the transport's reflect);
-//! - pull: an inner node's radiosity is the area mean of its children's, B_p = Σ_c A_c B_c / A_p, so the
-//!   power a node sends is exactly the power of its leaves; the transport's exitance state adds up.
+//! - pull: the transport's [`Transport::pull`]; by default an inner node's radiosity is the area mean of its
+//!   children's, B_p = Σ_c A_c B_c / A_p, so the power a node sends is exactly the power of its leaves, and
+//!   the transport's exitance state adds up (a higher-order basis pulls by its two-scale relation).
 //!
 //! Where some leaf is partly sealed (a transport's open shares, [`crate::open_share`]), radiosity and
 //! irradiance are held over open parts: sources weight their leaves by o_y A_y F_{y→r}, a link's delivery is
@@ -31,15 +32,14 @@ use radlab_scene::Rgb;
 use rayon::prelude::*;
 
 use crate::hierarchy::{Engine, NONE};
-use crate::link::Link;
 use crate::node::NodeKind;
-use crate::transport::{LinearState, Transport};
+use crate::transport::{LinearState, LinkPayload, Transport};
 
 /// A per-node state of the solution: radiosity (area mean) and the transport's exitance.
 pub(crate) type Field<X> = (Vec<Rgb>, Vec<X>);
 
 /// Which links a partial gather goes through, given (receiver, source, link).
-pub type LinkFilter<'f, N> = dyn Fn(&N, &N, &Link) -> bool + Sync + 'f;
+pub type LinkFilter<'f, N, L> = dyn Fn(&N, &N, &L) -> bool + Sync + 'f;
 
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Applies M (and adds E when `with_emission`) to a per-node radiosity `b` and exitance `x` whose inner
@@ -54,9 +54,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let h = self.gather_push(b, x, true);
         // Reflect at leaves.
         let (mut out_b, mut out_x): (Vec<Rgb>, Vec<T::Exitance>) = self
+            .tree
             .nodes
             .par_iter()
-            .zip(&self.children)
+            .zip(&self.tree.children)
             .zip(&h)
             .enumerate()
             .map(|(i, ((node, c), h))| {
@@ -85,33 +86,39 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         b: &[Rgb],
         x: &[T::Exitance],
         scaled: bool,
-        keep: Option<&LinkFilter<'_, N>>,
+        keep: Option<&LinkFilter<'_, N, T::Link>>,
     ) -> Vec<T::Irradiance> {
         let view = self.view();
         // What each link sends.
-        let flux: Vec<Vec<Rgb>> = self
+        let flux: Vec<Vec<T::Flux>> = self
             .links
+            .by_receiver
             .par_iter()
             .enumerate()
             .map(|(r, ls)| {
                 ls.iter()
                     .enumerate()
                     .map(|(k, l)| {
-                        if l.overlap {
-                            return Rgb::ZERO;
+                        if l.overlap() {
+                            return T::Flux::default();
                         }
-                        if keep
-                            .is_some_and(|f| !f(&self.nodes[r], &self.nodes[l.source as usize], l))
-                        {
-                            return Rgb::ZERO;
+                        if keep.is_some_and(|f| {
+                            !f(
+                                &self.tree.nodes[r],
+                                &self.tree.nodes[l.source() as usize],
+                                l,
+                            )
+                        }) {
+                            return T::Flux::default();
                         }
-                        if self.has_open {
+                        if self.solve.has_open {
                             return self.open_flux(&view, b, x, r, k, l);
                         }
-                        match self.source_rows[r].get(k) {
-                            Some(ws) if !ws.is_empty() => ws
-                                .iter()
-                                .fold(Rgb::ZERO, |s, (y, w)| s + *w * b[*y as usize]),
+                        match self.cache.source_rows[r].get(k) {
+                            Some(ws) if !ws.is_empty() => T::Flux::from(
+                                ws.iter()
+                                    .fold(Rgb::ZERO, |s, (y, w)| s + *w * b[*y as usize]),
+                            ),
                             _ => self.kernel.emit(&view, b, x, r as u32, l),
                         }
                     })
@@ -120,6 +127,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .collect();
         // Gather at every target.
         let mut h: Vec<T::Irradiance> = self
+            .cache
             .rows
             .par_iter()
             .map(|row| {
@@ -132,20 +140,22 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             })
             .collect();
         // Push: parents precede children in id order.
-        for i in 0..self.nodes.len() {
-            let p = self.parent[i];
+        for i in 0..self.tree.nodes.len() {
+            let p = self.tree.parent[i];
             if p != NONE {
-                let down =
-                    self.kernel
-                        .push(&self.nodes[p as usize], &self.nodes[i], &h[p as usize]);
+                let down = self.kernel.push(
+                    &self.tree.nodes[p as usize],
+                    &self.tree.nodes[i],
+                    &h[p as usize],
+                );
                 h[i].add_scaled(Rgb::ONE, &down);
             }
         }
-        if scaled && self.row_scale.len() == h.len() {
+        if scaled && self.solve.row_scale.len() == h.len() {
             for (i, hi) in h.iter_mut().enumerate() {
-                if self.children[i].1 == 0 {
+                if self.tree.children[i].1 == 0 {
                     let mut t = T::Irradiance::default();
-                    t.add_scaled(self.row_scale[i], hi);
+                    t.add_scaled(self.solve.row_scale[i], hi);
                     *hi = t;
                 }
             }
@@ -165,7 +175,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The part of each leaf's row sum (as [`Engine::row_sums`], before the row normalisation) that comes
     /// through the links `keep` accepts, given (receiver, source, link): the operator's rows split by kind
     /// of link or by source, to compare with the form factors the scene's geometry gives.
-    pub fn row_sums_through(&self, keep: &LinkFilter<'_, N>) -> Vec<Rgb> {
+    pub fn row_sums_through(&self, keep: &LinkFilter<'_, N, T::Link>) -> Vec<Rgb> {
         self.unit_gather_through(false, Some(keep))
     }
 
@@ -177,13 +187,17 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     }
 
     /// [`Engine::unit_gather`] through the links `keep` accepts.
-    fn unit_gather_through(&self, scaled: bool, keep: Option<&LinkFilter<'_, N>>) -> Vec<Rgb> {
-        let n = self.nodes.len();
+    fn unit_gather_through(
+        &self,
+        scaled: bool,
+        keep: Option<&LinkFilter<'_, N, T::Link>>,
+    ) -> Vec<Rgb> {
+        let n = self.tree.nodes.len();
         let mut u = vec![Rgb::ZERO; n];
         let mut ux = vec![T::Exitance::default(); n];
         for i in 0..n {
-            if self.children[i].1 == 0 {
-                match self.kernel.unit_response(&self.nodes[i]) {
+            if self.tree.children[i].1 == 0 {
+                match self.kernel.unit_response(&self.tree.nodes[i]) {
                     Some((b, x)) => (u[i], ux[i]) = (b, x),
                     None => return vec![Rgb::ZERO; n],
                 }
@@ -193,10 +207,10 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         let h = self.gather_push_through(&u, &ux, scaled, keep);
         (0..n)
             .map(|i| {
-                if self.children[i].1 != 0 {
+                if self.tree.children[i].1 != 0 {
                     return Rgb::ZERO;
                 }
-                let node = &self.nodes[i];
+                let node = &self.tree.nodes[i];
                 let (b, _) = self.kernel.reflect(node, &h[i], false);
                 let rho = node.reflectance();
                 Rgb::new(
@@ -216,56 +230,52 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// (R = 0: sealed off, or ρ = 0) is left alone. Needs the transport's `unit_response`; without it this
     /// does nothing.
     pub fn normalise_closed_rows(&mut self, on: bool) {
-        self.normalise_rows = on;
-        self.row_scale.clear();
+        self.solve.normalise_rows = on;
+        self.solve.row_scale.clear();
         self.operator_changed();
     }
 
     /// Recomputes the row normalisation for the current rows.
     fn update_row_scale(&mut self) {
-        self.row_scale.clear();
-        if !self.normalise_rows {
+        self.solve.row_scale.clear();
+        if !self.solve.normalise_rows {
             return;
         }
         let r = self.unit_gather(false);
-        self.row_scale = r
+        self.solve.row_scale = r
             .iter()
             .map(|r| Rgb::new(inverse(r.x), inverse(r.y), inverse(r.z)))
             .collect();
     }
 
-    /// Sets every inner node to the area mean of its children's radiosity and the sum of their exitance
-    /// (children follow parents in id order); with open shares, to the mean over their open areas
-    /// ([`Engine::pull_open`]).
+    /// Sets every inner node's radiosity and exitance from its children's by the transport's
+    /// [`Transport::pull`] (by default the area mean and the sum; children follow parents in id order); with
+    /// open shares, to the mean over their open areas ([`Engine::pull_open`]).
     pub(crate) fn pull(&self, b: &mut [Rgb], x: &mut [T::Exitance]) {
-        if self.has_open {
+        if self.solve.has_open {
             return self.pull_open(b, x);
         }
-        for i in (0..self.nodes.len()).rev() {
-            let (first, count) = self.children[i];
+        for i in (0..self.tree.nodes.len()).rev() {
+            let (first, count) = self.tree.children[i];
             if count == 0 {
                 continue;
             }
-            let mut sum = Rgb::ZERO;
-            let mut area = 0.0;
-            let mut xs = T::Exitance::default();
-            for c in first..first + count {
-                let a = self.nodes[c as usize].area();
-                sum += a * b[c as usize];
-                area += a;
-                xs.add_scaled(Rgb::ONE, &x[c as usize]);
-            }
-            b[i] = if area > 0.0 { sum / area } else { Rgb::ZERO };
-            x[i] = xs;
+            let kids = first as usize..(first + count) as usize;
+            (b[i], x[i]) = self.kernel.pull(
+                &self.tree.nodes[i],
+                &self.tree.nodes[kids.clone()],
+                &b[kids.clone()],
+                &x[kids],
+            );
         }
     }
 
     /// The leaves' responses to a unit irradiance from all around (zero at leaves `keep` rejects), pulled.
     fn uniform_field(&self, keep: impl Fn(usize) -> bool) -> Field<T::Exitance> {
-        let (mut u, mut ux): Field<T::Exitance> = (0..self.nodes.len())
+        let (mut u, mut ux): Field<T::Exitance> = (0..self.tree.nodes.len())
             .map(|i| {
-                if self.children[i].1 == 0 && keep(i) {
-                    self.kernel.uniform_response(&self.nodes[i])
+                if self.tree.children[i].1 == 0 && keep(i) {
+                    self.kernel.uniform_response(&self.tree.nodes[i])
                 } else {
                     (Rgb::ZERO, T::Exitance::default())
                 }
@@ -279,7 +289,14 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// without open shares), per channel, in node order: the power it sends.
     fn leaf_sum(&self, v: &[Rgb]) -> Rgb {
         let mut s = Rgb::ZERO;
-        for (((node, c), x), o) in self.nodes.iter().zip(&self.children).zip(v).zip(&self.open) {
+        for (((node, c), x), o) in self
+            .tree
+            .nodes
+            .iter()
+            .zip(&self.tree.children)
+            .zip(v)
+            .zip(&self.solve.open)
+        {
             if c.1 == 0 {
                 s += node.area() * *o * *x;
             }
@@ -291,32 +308,34 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// (infinite until two passes have run on the current links).
     pub(crate) fn solve_pass(&mut self) -> Result<f64, SolveError> {
         // The sources' radiosity changes: every link's light weight with it.
-        self.settled_epsilon = None;
-        if self.dirty.iter().any(|&d| d) {
+        self.links.settled_epsilon = None;
+        if self.cache.dirty.iter().any(|&d| d) {
             self.rebuild_rows();
             self.update_row_scale();
             self.update_open_shares();
-        } else if self.normalise_rows && self.row_scale.len() != self.nodes.len() {
+        } else if self.solve.normalise_rows && self.solve.row_scale.len() != self.tree.nodes.len() {
             self.update_row_scale();
         }
         // The coarse mode lives on the leaves light has reached: a closed interior that no light can enter
         // stays exactly dark (its leaves may still link to each other).
-        let support = (0..self.nodes.len())
-            .filter(|&i| self.children[i].1 == 0 && self.radiosity[i].max_element() > 0.0)
+        let support = (0..self.tree.nodes.len())
+            .filter(|&i| {
+                self.tree.children[i].1 == 0 && self.solve.radiosity[i].max_element() > 0.0
+            })
             .count();
-        if self.coarse_mu.is_none() || self.coarse_support != support {
+        if self.solve.coarse_mu.is_none() || self.solve.coarse_support != support {
             // The furnace mode: every lit leaf's response to a unit irradiance from all around.
-            let (u, ux) = self.uniform_field(|i| self.radiosity[i].max_element() > 0.0);
+            let (u, ux) = self.uniform_field(|i| self.solve.radiosity[i].max_element() > 0.0);
             let ((mu, mux), _) = self.apply(&u, &ux, false);
             let denom = self.leaf_sum(&u) - self.leaf_sum(&mu);
-            self.coarse_mu = Some((mu, mux));
-            self.coarse_denominator = denom;
-            self.coarse_support = support;
+            self.solve.coarse_mu = Some((mu, mux));
+            self.solve.coarse_denominator = denom;
+            self.solve.coarse_support = support;
         }
-        let b = std::mem::take(&mut self.radiosity);
-        let ((mut next, mut next_x), h) = self.apply(&b, &self.exitance, true);
+        let b = std::mem::take(&mut self.solve.radiosity);
+        let ((mut next, mut next_x), h) = self.apply(&b, &self.solve.exitance, true);
         let residual = self.leaf_sum(&next) - self.leaf_sum(&b);
-        let denom = self.coarse_denominator;
+        let denom = self.solve.coarse_denominator;
         let scale = self
             .leaf_sum(&next)
             .abs()
@@ -329,7 +348,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 c[k] = residual[k] / denom[k];
             }
         }
-        if let Some((mu, mux)) = &self.coarse_mu
+        if let Some((mu, mux)) = &self.solve.coarse_mu
             && c != Rgb::ZERO
         {
             for (x, m) in next.iter_mut().zip(mu) {
@@ -342,15 +361,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         // Size of the pass.
         let mut diff = 0.0;
         let mut norm = 0.0;
-        for i in 0..self.nodes.len() {
-            if self.children[i].1 == 0 {
-                let a = self.nodes[i].area();
+        for i in 0..self.tree.nodes.len() {
+            if self.tree.children[i].1 == 0 {
+                let a = self.tree.nodes[i].area();
                 diff += a * (next[i] - b[i]).abs().element_sum();
                 norm += a * next[i].abs().element_sum();
             }
         }
         if !(diff.is_finite() && norm.is_finite()) {
-            self.radiosity = b;
+            self.solve.radiosity = b;
             return Err(SolveError::Numerical(
                 "the hierarchical solution became non-finite: the discrete operator's gain exceeds one \
                  (with gather=link close to rho = 1 the per-link means overestimate form-factor sums; \
@@ -362,15 +381,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         // A fixed operator whose gain exceeds one: each pass changes the solution (in power, Σ A |ΔB|) at
         // least as much as the one before, and the solution grows without bound, slowly enough near ρ = 1 to
         // stay finite for 10⁵ passes. (The relative change diff/norm shrinks either way.)
-        self.growing_passes = match self.last_diff {
-            Some(prev) if self.passes_since_change >= 1 && diff > 0.0 && diff >= prev => {
-                self.growing_passes + 1
+        self.solve.growing_passes = match self.solve.last_diff {
+            Some(prev) if self.solve.passes_since_change >= 1 && diff > 0.0 && diff >= prev => {
+                self.solve.growing_passes + 1
             }
             _ => 0,
         };
-        self.last_diff = Some(diff);
-        if self.growing_passes >= DIVERGING_PASSES {
-            self.radiosity = b;
+        self.solve.last_diff = Some(diff);
+        if self.solve.growing_passes >= DIVERGING_PASSES {
+            self.solve.radiosity = b;
             return Err(SolveError::Numerical(format!(
                 "the hierarchical solution diverges: {DIVERGING_PASSES} passes in a row, with the links \
                  unchanged, each changed it at least as much as the one before (relative change {step:.3e}, \
@@ -380,12 +399,12 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                  lower the reflectance"
             )));
         }
-        self.radiosity = next;
-        self.exitance = next_x;
-        self.irradiance = h;
-        self.passes_since_change += 1;
-        let estimate = match self.last_norm {
-            Some(prev) if self.passes_since_change >= 2 => {
+        self.solve.radiosity = next;
+        self.solve.exitance = next_x;
+        self.solve.irradiance = h;
+        self.solve.passes_since_change += 1;
+        let estimate = match self.solve.last_norm {
+            Some(prev) if self.solve.passes_since_change >= 2 => {
                 if step == 0.0 {
                     0.0
                 } else if prev > 0.0 {
@@ -397,9 +416,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
             _ => f64::INFINITY,
         };
-        self.last_norm = Some(step);
-        self.residual = Some(if estimate.is_finite() { estimate } else { step });
-        self.converged = estimate < self.params.tolerance;
+        self.solve.last_norm = Some(step);
+        self.solve.residual = Some(if estimate.is_finite() { estimate } else { step });
+        self.solve.converged = estimate < self.params.tolerance;
         Ok(estimate)
     }
 }

@@ -15,23 +15,22 @@ use radlab_method::SolveError;
 use rayon::prelude::*;
 
 use crate::hierarchy::Engine;
-use crate::link::Link;
 use crate::node::NodeKind;
 use crate::oracle::{Action, decide, light_weight};
 use crate::params::ErrorNorm;
-use crate::transport::Transport;
+use crate::transport::{LinkPayload, SourceLight, Transport};
 
 impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Whether root `r` carries light now (emits, or has received some).
     pub(crate) fn root_is_lit(&self, r: u32) -> bool {
-        self.radiosity[r as usize].max_element() > 0.0
-            || self.nodes[r as usize].emission().max_element() > 0.0
+        self.solve.radiosity[r as usize].max_element() > 0.0
+            || self.tree.nodes[r as usize].emission().max_element() > 0.0
     }
 
     /// Creates the initial links from every root in `new_sources` (as sources) to every root that can receive
     /// from it, then marks them linked. Returns the number of links made.
     pub(crate) fn link_roots(&mut self, new_sources: &[u32]) -> Result<usize, SolveError> {
-        let k = self.roots.len();
+        let k = self.tree.roots.len();
         let mut is_new = vec![false; k];
         for &s in new_sources {
             is_new[s as usize] = true;
@@ -45,8 +44,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                         s != r
                             && is_new[s]
                             && self.kernel.may_interact(
-                                &self.nodes[self.roots[r] as usize],
-                                &self.nodes[self.roots[s] as usize],
+                                &self.tree.nodes[self.tree.roots[r] as usize],
+                                &self.tree.nodes[self.tree.roots[s] as usize],
                             )
                     })
                     .count()
@@ -55,16 +54,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .into_iter()
             .sum();
         self.check_budget(candidates, 0)?;
-        let made: Vec<Vec<Link>> = (0..k)
+        let made: Vec<Vec<T::Link>> = (0..k)
             .into_par_iter()
             .map(|r| {
-                let rid = self.roots[r];
-                let recv = &self.nodes[rid as usize];
+                let rid = self.tree.roots[r];
+                let recv = &self.tree.nodes[rid as usize];
                 (0..k)
                     .filter(|&s| s != r && is_new[s])
                     .filter_map(|s| {
-                        let sid = self.roots[s];
-                        let src = &self.nodes[sid as usize];
+                        let sid = self.tree.roots[s];
+                        let src = &self.tree.nodes[sid as usize];
                         if self.kernel.may_interact(recv, src) {
                             self.kernel.link(recv, rid, src, sid)
                         } else {
@@ -78,13 +77,13 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         for (r, ls) in made.into_iter().enumerate() {
             count += ls.len();
             if !ls.is_empty() {
-                self.dirty[self.roots[r] as usize] = true;
+                self.cache.dirty[self.tree.roots[r] as usize] = true;
             }
-            self.links[self.roots[r] as usize].extend(ls);
+            self.links.by_receiver[self.tree.roots[r] as usize].extend(ls);
         }
         self.form_factors += candidates as u64;
         for &s in new_sources {
-            self.linked[s as usize] = true;
+            self.links.linked[s as usize] = true;
         }
         if count > 0 {
             self.operator_changed();
@@ -95,7 +94,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// Adds the link `recv ← src` computed by the transport (a volume-cluster method starts from its root's
     /// self-link). Returns whether a link was made (the transport may find nothing to transfer).
     pub fn add_link(&mut self, recv: u32, src: u32) -> Result<bool, SolveError> {
-        let n = self.nodes.len() as u32;
+        let n = self.tree.nodes.len() as u32;
         if recv >= n || src >= n {
             return Err(SolveError::param(
                 "link",
@@ -105,30 +104,32 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.check_budget(1, 0)?;
         self.form_factors += 1;
         let l = self.kernel.link(
-            &self.nodes[recv as usize],
+            &self.tree.nodes[recv as usize],
             recv,
-            &self.nodes[src as usize],
+            &self.tree.nodes[src as usize],
             src,
         );
+        let made = l.is_some();
         if let Some(l) = l {
-            self.links[recv as usize].push(l);
-            self.dirty[recv as usize] = true;
+            self.links.by_receiver[recv as usize].push(l);
+            self.cache.dirty[recv as usize] = true;
             self.operator_changed();
         }
-        Ok(l.is_some())
+        Ok(made)
     }
 
     /// Marks every root as linked, so the schedule creates no initial links of its own (for methods that
     /// start from links they add themselves).
     pub fn skip_initial_links(&mut self) {
-        self.linked.iter_mut().for_each(|l| *l = true);
+        self.links.linked.iter_mut().for_each(|l| *l = true);
     }
 
     /// Roots that are lit but not yet linked as sources (all unlinked roots when `lazy` is false).
     pub(crate) fn pending_sources(&self, lazy: bool) -> Vec<u32> {
-        (0..self.roots.len() as u32)
+        (0..self.tree.roots.len() as u32)
             .filter(|&r| {
-                !self.linked[r as usize] && (!lazy || self.root_is_lit(self.roots[r as usize]))
+                !self.links.linked[r as usize]
+                    && (!lazy || self.root_is_lit(self.tree.roots[r as usize]))
             })
             .collect()
     }
@@ -137,9 +138,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// area): the BF and variation oracles' scale.
     pub(crate) fn radiosity_scale(&self) -> f64 {
         let (mut sum, mut area) = (radlab_scene::Rgb::ZERO, 0.0);
-        for &r in &self.roots {
-            let a = self.nodes[r as usize].area();
-            sum += a * self.open[r as usize] * self.radiosity[r as usize];
+        for &r in &self.tree.roots {
+            let a = self.tree.nodes[r as usize].area();
+            sum += a * self.solve.open[r as usize] * self.solve.radiosity[r as usize];
             area += a;
         }
         if area > 0.0 {
@@ -159,44 +160,54 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// are examined. A stage's passes then cost its links once, not once per level the stage descends.
     pub(crate) fn refine_pass(&mut self, epsilon: f64) -> Result<usize, SolveError> {
         // Per receiver, its first link the oracle is asked about (those before it are kept).
-        let open_from: Vec<usize> = if self.settled_epsilon == Some(epsilon) {
-            self.settled.iter().map(|&n| n as usize).collect()
+        let open_from: Vec<usize> = if self.links.settled_epsilon == Some(epsilon) {
+            self.links.settled.iter().map(|&n| n as usize).collect()
         } else {
-            vec![0; self.links.len()]
+            vec![0; self.links.by_receiver.len()]
         };
         let oracle = self.params.oracle;
         let min_size = self.min_size;
         let scale = self.radiosity_scale();
         let total_area: f64 = self
+            .tree
             .roots
             .iter()
-            .map(|&r| self.nodes[r as usize].area())
+            .map(|&r| self.tree.nodes[r as usize].area())
             .sum();
         let power_norm = self.params.error_norm == ErrorNorm::Power && total_area > 0.0;
         let decisions: Vec<Vec<Action>> = self
             .links
+            .by_receiver
             .par_iter()
             .enumerate()
             .map(|(r, ls)| {
-                let recv = &self.nodes[r];
+                let recv = &self.tree.nodes[r];
                 ls[open_from[r]..]
                     .iter()
                     .map(|l| {
-                        let src = &self.nodes[l.source as usize];
+                        let src = &self.tree.nodes[l.source() as usize];
                         let w = light_weight(
                             recv.reflectance(),
-                            self.radiosity[l.source as usize],
+                            self.solve.radiosity[l.source() as usize],
                             scale,
                         );
+                        let error = (!l.overlap()).then(|| {
+                            let light = SourceLight {
+                                oracle,
+                                weight: w,
+                                radiosity: self.solve.radiosity[l.source() as usize],
+                                exitance: &self.solve.exitance[l.source() as usize],
+                                scale,
+                            };
+                            self.kernel.link_error(recv, src, l, &light)
+                        });
                         decide(
-                            oracle,
                             epsilon,
                             min_size,
                             recv,
                             src,
-                            r as u32 == l.source,
-                            l,
-                            w,
+                            r as u32 == l.source(),
+                            error,
                             if power_norm {
                                 recv.area() / total_area
                             } else {
@@ -210,13 +221,13 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         // `decisions[r]` covers the links of receiver r from `open_from[r]` on.
         // Elements to split, in id order.
         let mut to_split = Vec::new();
-        for (r, (ls, ds)) in self.links.iter().zip(&decisions).enumerate() {
+        for (r, (ls, ds)) in self.links.by_receiver.iter().zip(&decisions).enumerate() {
             for (l, d) in ls[open_from[r]..].iter().zip(ds) {
                 if matches!(d, Action::SplitReceiver | Action::SplitBoth) {
                     to_split.push(r as u32);
                 }
                 if matches!(d, Action::SplitSource | Action::SplitBoth) {
-                    to_split.push(l.source);
+                    to_split.push(l.source());
                 }
             }
         }
@@ -229,16 +240,16 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         for (r, ds) in decisions.iter().enumerate() {
             let changed = ds.iter().filter(|d| **d != Action::Keep).count();
             replaced += changed;
-            self.decisions += ds.len() as u64;
-            self.settled[r] = (open_from[r] + ds.len() - changed) as u32;
+            self.links.decisions += ds.len() as u64;
+            self.links.settled[r] = (open_from[r] + ds.len() - changed) as u32;
         }
-        self.settled_epsilon = Some(epsilon);
+        self.links.settled_epsilon = Some(epsilon);
         if replaced == 0 {
             return Ok(0);
         }
         if let Err(e) = self.check_budget(replaced * 16, to_split.len() * 4) {
             // The links are not yet reordered as the settled counts assume.
-            self.settled_epsilon = None;
+            self.links.settled_epsilon = None;
             return Err(e);
         }
         for i in to_split {
@@ -250,11 +261,11 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             if ds.iter().all(|d| *d == Action::Keep) {
                 continue;
             }
-            let mut old = std::mem::take(&mut self.links[r]).into_iter();
+            let mut old = std::mem::take(&mut self.links.by_receiver[r]).into_iter();
             let mut kept = Vec::with_capacity(old.len());
             kept.extend(old.by_ref().take(open_from[r]));
             for (l, d) in old.zip(ds) {
-                let s = l.source;
+                let s = l.source();
                 match d {
                     Action::Keep => kept.push(l),
                     Action::SplitReceiver => {
@@ -276,22 +287,26 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                     }
                 }
             }
-            self.links[r] = kept;
-            self.dirty[r] = true;
+            self.links.by_receiver[r] = kept;
+            self.cache.dirty[r] = true;
         }
         self.check_budget(specs.len(), 0)?;
-        let made: Vec<Option<Link>> = specs
+        let made: Vec<Option<T::Link>> = specs
             .par_iter()
             .map(|&(r, s)| {
-                self.kernel
-                    .link(&self.nodes[r as usize], r, &self.nodes[s as usize], s)
+                self.kernel.link(
+                    &self.tree.nodes[r as usize],
+                    r,
+                    &self.tree.nodes[s as usize],
+                    s,
+                )
             })
             .collect();
         self.form_factors += specs.len() as u64;
         for ((r, _), l) in specs.into_iter().zip(made) {
             if let Some(l) = l {
-                self.links[r as usize].push(l);
-                self.dirty[r as usize] = true;
+                self.links.by_receiver[r as usize].push(l);
+                self.cache.dirty[r as usize] = true;
             }
         }
         self.operator_changed();
@@ -300,12 +315,12 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     /// Forget what the solver knew about the old operator.
     pub(crate) fn operator_changed(&mut self) {
-        self.coarse_mu = None;
-        self.passes_since_change = 0;
-        self.growing_passes = 0;
-        self.last_diff = None;
-        self.last_norm = None;
-        self.converged = false;
+        self.solve.coarse_mu = None;
+        self.solve.passes_since_change = 0;
+        self.solve.growing_passes = 0;
+        self.solve.last_diff = None;
+        self.solve.last_norm = None;
+        self.solve.converged = false;
     }
 }
 
@@ -333,7 +348,7 @@ mod tests {
         let (mut replaced, mut at_start) = (0, 0);
         loop {
             if forget {
-                e.settled_epsilon = None;
+                e.links.settled_epsilon = None;
             }
             at_start += e.link_count() as u64;
             let r = e.refine_pass(1e-2).expect("refine") as u64;
@@ -353,9 +368,14 @@ mod tests {
         let (fresh, _, at_start) = refine_to_rest(&scene, &accel, true);
         let (settled, fresh) = (settled.engine(), fresh.engine());
         // The same hierarchy and links, in the same order.
-        assert_eq!(settled.nodes.len(), fresh.nodes.len());
+        assert_eq!(settled.tree.nodes.len(), fresh.tree.nodes.len());
         assert_eq!(settled.form_factors, fresh.form_factors);
-        for (a, b) in settled.links.iter().zip(&fresh.links) {
+        for (a, b) in settled
+            .links
+            .by_receiver
+            .iter()
+            .zip(&fresh.links.by_receiver)
+        {
             let (sa, sb): (Vec<u32>, Vec<u32>) = (
                 a.iter().map(|l| l.source).collect(),
                 b.iter().map(|l| l.source).collect(),
@@ -364,8 +384,11 @@ mod tests {
         }
         // Settled: each link that ever existed was asked about once (those replaced, and those left).
         // Afresh: every link at every pass it was there for.
-        assert_eq!(settled.decisions, settled.link_count() as u64 + replaced);
-        assert_eq!(fresh.decisions, at_start);
-        assert!(fresh.decisions > settled.decisions);
+        assert_eq!(
+            settled.links.decisions,
+            settled.link_count() as u64 + replaced
+        );
+        assert_eq!(fresh.links.decisions, at_start);
+        assert!(fresh.links.decisions > settled.links.decisions);
     }
 }

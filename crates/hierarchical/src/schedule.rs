@@ -24,7 +24,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
     /// The threshold of the current stage.
     pub fn current_epsilon(&self) -> f64 {
         match self.params.schedule {
-            Schedule::Scheduled => self.params.stage_epsilon(self.stage),
+            Schedule::Scheduled => self.params.stage_epsilon(self.schedule.stage),
             _ => self.params.epsilon,
         }
     }
@@ -48,35 +48,35 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     /// One unit of work of the schedule.
     pub fn step(&mut self) -> Result<Step, SolveError> {
-        if self.phase == Phase::Done {
+        if self.schedule.phase == Phase::Done {
             return Ok(Step::Converged);
         }
         if self.steps >= self.params.max_steps {
-            self.phase = Phase::Done;
+            self.schedule.phase = Phase::Done;
             return Ok(Step::Capped);
         }
         self.steps += 1;
         let lazy = self.lazy();
         loop {
-            match (self.params.schedule, self.phase) {
+            match (self.params.schedule, self.schedule.phase) {
                 (_, Phase::Done) => return Ok(Step::Converged),
                 (Schedule::TwoStage, Phase::Link) => {
                     let all = self.pending_sources(false);
                     self.link_roots(&all)?;
-                    self.phase = Phase::Refine;
+                    self.schedule.phase = Phase::Refine;
                     return Ok(Step::Continue);
                 }
                 (Schedule::TwoStage, Phase::Refine) => {
                     if self.refine_pass(self.params.epsilon)? == 0 {
-                        self.phase = Phase::Solve;
+                        self.schedule.phase = Phase::Solve;
                         continue;
                     }
                     return Ok(Step::Continue);
                 }
                 (Schedule::TwoStage, Phase::Solve) => {
                     self.solve_pass()?;
-                    if self.converged {
-                        self.phase = Phase::Done;
+                    if self.solve.converged {
+                        self.schedule.phase = Phase::Done;
                         return Ok(Step::Converged);
                     }
                     return Ok(Step::Continue);
@@ -84,8 +84,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 (Schedule::Interleaved, Phase::Link) => {
                     let new = self.pending_sources(lazy);
                     self.link_roots(&new)?;
-                    self.refine_changed = true;
-                    self.phase = Phase::Solve;
+                    self.schedule.refine_changed = true;
+                    self.schedule.phase = Phase::Solve;
                     return Ok(Step::Continue);
                 }
                 (Schedule::Interleaved, Phase::Refine) => {
@@ -96,52 +96,52 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                         self.link_roots(&new)?
                     };
                     let refined = self.refine_pass(self.params.epsilon)?;
-                    self.refine_changed = !new.is_empty() || made + refined > 0;
-                    self.phase = Phase::Solve;
+                    self.schedule.refine_changed = !new.is_empty() || made + refined > 0;
+                    self.schedule.phase = Phase::Solve;
                     return Ok(Step::Continue);
                 }
                 (Schedule::Interleaved, Phase::Solve) => {
                     self.solve_pass()?;
-                    if self.converged && !self.refine_changed {
-                        self.phase = Phase::Done;
+                    if self.solve.converged && !self.schedule.refine_changed {
+                        self.schedule.phase = Phase::Done;
                         return Ok(Step::Converged);
                     }
-                    self.phase = Phase::Refine;
+                    self.schedule.phase = Phase::Refine;
                     return Ok(Step::Continue);
                 }
                 (Schedule::Scheduled, Phase::Link) => {
                     let new = self.pending_sources(lazy);
-                    self.phase = Phase::Refine;
+                    self.schedule.phase = Phase::Refine;
                     if new.is_empty() {
                         continue;
                     }
                     self.link_roots(&new)?;
-                    self.stage_changed = true;
+                    self.schedule.stage_changed = true;
                     return Ok(Step::Continue);
                 }
                 (Schedule::Scheduled, Phase::Refine) => {
                     if self.refine_pass(self.current_epsilon())? > 0 {
-                        self.stage_changed = true;
+                        self.schedule.stage_changed = true;
                         return Ok(Step::Continue);
                     }
-                    self.phase = Phase::Solve;
+                    self.schedule.phase = Phase::Solve;
                     continue;
                 }
                 (Schedule::Scheduled, Phase::Solve) => {
-                    if !self.converged {
+                    if !self.solve.converged {
                         self.solve_pass()?;
-                        if !self.converged {
+                        if !self.solve.converged {
                             return Ok(Step::Continue);
                         }
                     }
-                    let last = self.stage + 1 >= self.params.stages;
-                    if last && !self.stage_changed {
-                        self.phase = Phase::Done;
+                    let last = self.schedule.stage + 1 >= self.params.stages;
+                    if last && !self.schedule.stage_changed {
+                        self.schedule.phase = Phase::Done;
                         return Ok(Step::Converged);
                     }
-                    self.stage += 1;
-                    self.stage_changed = false;
-                    self.phase = Phase::Link;
+                    self.schedule.stage += 1;
+                    self.schedule.stage_changed = false;
+                    self.schedule.phase = Phase::Link;
                     // The pass just done was this step's work.
                     return Ok(Step::Continue);
                 }

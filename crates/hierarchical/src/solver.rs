@@ -7,10 +7,10 @@ use radlab_scene::{FaceId, Rgb, Scene};
 use radlab_visibility::Accel;
 
 use crate::hierarchy::Engine;
-use crate::link::PatchKernel;
 use crate::node::Patch;
 use crate::output::{SurfaceOutput, locate};
 use crate::params::HierarchicalParams;
+use crate::patch_transport::PatchKernel;
 
 /// Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991) over a scene; see the crate documentation.
 #[derive(Debug)]

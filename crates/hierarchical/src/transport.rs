@@ -5,19 +5,28 @@
 //!
 //! One solution pass of the engine is, for every link r ← s with receiver r and source s,
 //!
-//!   J_l = emit(l, s)                      what the source sends along the link (per channel),
+//!   J_l = emit(l, s)                      what the source sends along the link (the transport's flux: one
+//!                                         radiosity per channel for a constant basis),
 //!   h_t += deliver(c_{t,l}, J_l)          at every gather target t of the link (r itself, or the faces or
 //!                                         leaves below r), with a coefficient c_{t,l} computed once per
 //!                                         (target, link) and cached,
 //!   h_c += push(p, c, h_p)                from every parent p to each child c, top down,
-//!   (B, x)_leaf = reflect(leaf, h)        radiosity (and any further exitance state) at each leaf,
-//!   B_p = Σ A_c B_c / A_p,  x_p = Σ x_c   pulled up.
+//!   (B, x)_leaf = reflect(leaf, h)        radiosity (the mean, per channel) and any further exitance state
+//!                                         (a higher-order basis: its other coefficients) at each leaf,
+//!   (B, x)_p = pull(p, children)          pulled up (by default B_p = Σ A_c B_c / A_p, x_p = Σ x_c).
 //!
-//! A link r ← s that sends its source's radiosity ([`Transport::sends_source_radiosity`]), from an inner
-//! node of patches to a patch, sends instead the mean of the radiosity of the leaves y below s weighted by
-//! how much each sees r (o_y A_y F_{y→r}, o_y the leaf's open share, 1 unless the transport estimates one:
-//! [`Transport::open_share`]), not their area mean: the source side sends each leaf's own share, as
-//! the receiver side gathers at each leaf.
+//! Refinement asks the transport for each link's error (`link_error`, by default the link payload's own:
+//! the F, BF and variation oracles of the form-factor [`crate::Link`]), and a point answer asks it for a
+//! leaf's radiosity at the point (`radiosity_at`, by default the leaf's mean). What a link carries
+//! ([`Transport::Link`], anything implementing [`LinkPayload`]) and what a source sends
+//! ([`Transport::Flux`]) are the transport's: a basis of M² functions per element carries M⁴ coefficients
+//! per link and sends M² per channel, without a change to the engine.
+//!
+//! A link r ← s whose transport weighs its source's leaves ([`Transport::weighs_source_leaves`]; patches:
+//! a form-factor link to a patch), from an inner node, sends instead the mean of the radiosity of the
+//! leaves y below s weighted by [`Transport::source_leaf_weight`] (patches: how much each sees r, A_y F_{y→r};
+//! times o_y, the leaf's open share, 1 unless the transport estimates one: [`Transport::open_share`]), not
+//! their area mean: the source side sends each leaf's own share, as the receiver side gathers at each leaf.
 //!
 //! For patches h is irradiance, J the source's radiosity and c = V F (the gather H = Σ V F B); for a
 //! face cluster h is an irradiance vector per channel and x a power vector; for a directional cluster h and x
@@ -25,10 +34,12 @@
 
 use std::fmt::Debug;
 
+use glam::DVec3;
+
 use radlab_scene::Rgb;
 
-use crate::link::Link;
 use crate::node::NodeKind;
+use crate::params::Oracle;
 
 /// Per-channel linear state carried by nodes (irradiance, exitance): zero, addition and per-channel scaling,
 /// which is all that gather, push, pull and the solver's coarse correction need.
@@ -84,31 +95,119 @@ pub enum GatherAt {
     Descend,
 }
 
-/// A node kind's light model: what a link transfers, how a receiver distributes what it gathers, how push and
-/// pull combine parent and children, and the geometry and visibility of links.
+/// What the engine reads of a link, whatever else the transport's link carries ([`Transport::Link`]): its
+/// source, whether its ends overlap, and the refinement oracle's estimate of its error. The engine stores
+/// links with their receivers, moves them whole and never looks inside: a transport with a higher-order
+/// basis carries its M⁴ transfer coefficients here.
+pub trait LinkPayload: Clone + Send + Sync + Debug {
+    /// The source node's id.
+    fn source(&self) -> u32;
+
+    /// Whether the two ends overlap in space (a self-link of a cluster, a cluster and something inside its
+    /// bound): the link carries nothing and the refinement must split it (Sillion 1995).
+    fn overlap(&self) -> bool {
+        false
+    }
+
+    /// The refinement oracle's estimate of the link's error under `oracle`, given its light weight
+    /// ([`crate::light_weight`]: max over channels of ρ_r B_s over the scene's mean radiosity); the default
+    /// of [`Transport::link_error`].
+    fn error(&self, oracle: Oracle, weight: f64) -> LinkError;
+}
+
+/// A link's error as the refinement reads it ([`crate::decide`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkError {
+    /// The estimate e: the link stays when e (times the error norm's factor) is at most ε.
+    pub estimate: f64,
+    /// The part of the estimate each end alone is responsible for (the F and BF oracles: the smaller of
+    /// the two form factors, times the light weight): when it too exceeds ε, both ends are split at once.
+    /// `None`: one end is split at a time.
+    pub each_end: Option<f64>,
+}
+
+/// What the refinement knows of a link's source when it asks for the link's error
+/// ([`Transport::link_error`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SourceLight<'a, X> {
+    /// The oracle the parameters name.
+    pub oracle: Oracle,
+    /// The link's light weight: max over channels of ρ_r B_s over the scene's area-mean radiosity
+    /// ([`crate::light_weight`]; 0 when nothing is lit).
+    pub weight: f64,
+    /// The source's radiosity B_s (its mean).
+    pub radiosity: Rgb,
+    /// The source's exitance state (a higher-order basis: its coefficients beyond the mean).
+    pub exitance: &'a X,
+    /// The scene's area-mean radiosity (max channel), the light weight's scale.
+    pub scale: f64,
+}
+
+/// What a source sends along a link in one pass ([`Transport::emit`]) and a target receives through its
+/// coefficient ([`Transport::deliver`]): for a constant basis one radiosity per channel ([`Rgb`]), for a
+/// basis of M² functions per element its M² coefficients per channel.
+pub trait SourceFlux: Copy + Default + Send + Sync + Debug + From<Rgb> {
+    /// The flux times `s` (the receiver gain of open shares, [`crate::Engine::open_shares`]).
+    /// `From<Rgb>` is the flux of a source of uniform radiosity B (what a source weighted over its leaves
+    /// sends, [`Transport::source_leaf_weight`]).
+    fn scaled(self, s: f64) -> Self;
+}
+
+impl SourceFlux for Rgb {
+    fn scaled(self, s: f64) -> Self {
+        self * s
+    }
+}
+
+/// A node kind's light model: what a link carries and transfers, how a receiver distributes what it
+/// gathers, how push and pull combine parent and children, how a link's error is estimated and how a leaf is
+/// evaluated at a point. The hooks with defaults keep the constant (piecewise-constant radiosity) basis of
+/// Hanrahan, Salzman & Aupperle 1991; a higher-order basis (Gortler, Schröder, Cohen & Hanrahan 1993) chooses
+/// its own link payload, flux, irradiance and exitance types and overrides [`Transport::pull`] and
+/// [`Transport::radiosity_at`] (the crate's `tests/transport_contract.rs` shows both).
 pub trait Transport<N: NodeKind>: Sync {
     /// What a node gathers and pushes to its children.
     type Irradiance: LinearState;
-    /// Exitance state besides the area-mean radiosity the engine always keeps, summed from children to
-    /// parent (`()` when radiosity is all a source needs).
+    /// Exitance state besides the area-mean radiosity the engine always keeps, pulled from children to
+    /// parent by [`Transport::pull`] (`()` when radiosity is all a source needs; a higher-order basis's
+    /// coefficients beyond the mean).
     type Exitance: LinearState;
     /// A link's coefficient at one gather target, cached between passes.
     type Coefficient: Copy + Send + Sync + Debug;
+    /// What a link carries ([`crate::Link`] for the form-factor links of patches and clusters).
+    type Link: LinkPayload;
+    /// What a source sends along a link in one pass ([`Rgb`] for a constant basis).
+    type Flux: SourceFlux;
 
     /// Whether two root nodes can exchange light at all (a cheap geometric test for the initial links).
     fn may_interact(&self, recv: &N, src: &N) -> bool;
 
     /// The link carrying light from `src` to `recv` (geometry, visibility and what the oracles read), or
-    /// `None` when nothing is transferred. A link whose ends overlap is returned with [`Link::overlap`] set:
-    /// it carries nothing and the refinement must split it.
-    fn link(&self, recv: &N, recv_id: u32, src: &N, src_id: u32) -> Option<Link>;
+    /// `None` when nothing is transferred. A link whose ends overlap is returned with
+    /// [`LinkPayload::overlap`] set: it carries nothing and the refinement must split it.
+    fn link(&self, recv: &N, recv_id: u32, src: &N, src_id: u32) -> Option<Self::Link>;
+
+    /// The refinement oracle's estimate of `link`'s error (`recv ← src`), from what the refinement knows
+    /// of the source's light (`light`). By default the link's own ([`LinkPayload::error`] under
+    /// `light.oracle` and `light.weight`; for [`crate::Link`], the F, BF and variation oracles). A
+    /// higher-order basis's oracle reads the source's coefficients there (its exitance).
+    fn link_error(
+        &self,
+        recv: &N,
+        src: &N,
+        link: &Self::Link,
+        light: &SourceLight<'_, Self::Exitance>,
+    ) -> LinkError {
+        let _ = (recv, src);
+        link.error(light.oracle, light.weight)
+    }
 
     /// Where the link `recv ← src` is evaluated.
     fn gather_at(&self, recv: &N, src: &N) -> GatherAt;
 
     /// Whether a [`GatherAt::Descend`] link from `src` is evaluated at `target`, a node strictly between the
     /// link's receiver and the input faces below it, rather than further down. By default nothing is.
-    fn resolves(&self, target: &N, src: &N, link: &Link) -> bool {
+    fn resolves(&self, target: &N, src: &N, link: &Self::Link) -> bool {
         let _ = (target, src, link);
         false
     }
@@ -116,8 +215,13 @@ pub trait Transport<N: NodeKind>: Sync {
     /// The link's coefficient at gather target `target`: the receiver itself (`at_receiver`, from what the
     /// link already holds), or a node, face or leaf below it (a kernel evaluation, counted as a form
     /// factor).
-    fn coefficient(&self, target: &N, src: &N, link: &Link, at_receiver: bool)
-    -> Self::Coefficient;
+    fn coefficient(
+        &self,
+        target: &N,
+        src: &N,
+        link: &Self::Link,
+        at_receiver: bool,
+    ) -> Self::Coefficient;
 
     /// What the source sends along `link` (stored with receiver `recv`) this pass, from the per-node radiosity
     /// `b` and exitance `x` (indexed by node id) and the hierarchy `view` (for sources that read their
@@ -128,16 +232,24 @@ pub trait Transport<N: NodeKind>: Sync {
         b: &[Rgb],
         x: &[Self::Exitance],
         recv: u32,
-        link: &Link,
-    ) -> Rgb;
+        link: &Self::Link,
+    ) -> Self::Flux;
 
-    /// Whether `link` sends its source's radiosity (its [`Transport::emit`] is the source's entry of `b`), so
-    /// that where the source is an inner node whose leaves and the receiver are patches
-    /// ([`NodeKind::patch`]) the engine sends in its place the mean of the leaves' radiosity weighted by how
-    /// much each sees the receiver, A_y F_{y→r} (the crate's `gather_rows` module). By default every link not
-    /// [`Link::clustered`].
-    fn sends_source_radiosity(&self, link: &Link) -> bool {
-        !link.clustered
+    /// Whether `link` to `recv`, from an inner node, sends instead of its [`Transport::emit`] the mean of the
+    /// radiosity of the leaves y below its source weighted by [`Transport::source_leaf_weight`] (the
+    /// crate's `gather_rows` module). By default no link does.
+    fn weighs_source_leaves(&self, recv: &N, link: &Self::Link) -> bool {
+        let _ = (recv, link);
+        false
+    }
+
+    /// The weight of leaf `leaf` below a link's source in what the link sends to `recv` (patches: how much
+    /// the leaf sees the receiver, A_y F_{y→r}, one kernel evaluation), or `None` when it cannot be weighed
+    /// (the link then sends its [`Transport::emit`]). Asked only where [`Transport::weighs_source_leaves`]
+    /// holds.
+    fn source_leaf_weight(&self, leaf: &N, recv: &N) -> Option<f64> {
+        let _ = (leaf, recv);
+        None
     }
 
     /// The open share o ∈ [0, 1] of leaf `leaf`: the share of its area light can reach at all
@@ -160,7 +272,7 @@ pub trait Transport<N: NodeKind>: Sync {
     }
 
     /// Adds to `h` what a target with coefficient `c` receives from a link sending `flux`.
-    fn deliver(&self, h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Rgb);
+    fn deliver(&self, h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Self::Flux);
 
     /// What child `child` receives of its parent's total irradiance `h` (by default, all of it).
     fn push(&self, parent: &N, child: &N, h: &Self::Irradiance) -> Self::Irradiance {
@@ -172,6 +284,38 @@ pub trait Transport<N: NodeKind>: Sync {
     /// a patch (E omitted when `with_emission` is false, for the solver's linear corrections).
     fn reflect(&self, leaf: &N, h: &Self::Irradiance, with_emission: bool)
     -> (Rgb, Self::Exitance);
+
+    /// An inner node's radiosity and exitance from its children's (`children`, `b` and `x` aligned): by
+    /// default the area mean Σ A_c B_c / Σ A_c (zero for no area) and the sum of the exitance. A basis with
+    /// more than the mean per element pulls its coefficients by its two-scale relation. (Where some leaf is
+    /// partly sealed, [`Transport::open_share`], the engine pulls means over open areas instead.)
+    fn pull(
+        &self,
+        parent: &N,
+        children: &[N],
+        b: &[Rgb],
+        x: &[Self::Exitance],
+    ) -> (Rgb, Self::Exitance) {
+        let _ = parent;
+        let mut sum = Rgb::ZERO;
+        let mut area = 0.0;
+        let mut xs = Self::Exitance::default();
+        for ((c, bc), xc) in children.iter().zip(b).zip(x) {
+            let a = c.area();
+            sum += a * *bc;
+            area += a;
+            xs.add_scaled(Rgb::ONE, xc);
+        }
+        (if area > 0.0 { sum / area } else { Rgb::ZERO }, xs)
+    }
+
+    /// The radiosity of leaf `leaf` at `point` (on the leaf), from its radiosity `b` (the mean) and exitance
+    /// `x`: by default `b`, constant over the leaf. What an answering layer reads at a point
+    /// ([`crate::Engine::radiosity_at_leaf`]).
+    fn radiosity_at(&self, leaf: &N, b: Rgb, x: &Self::Exitance, point: DVec3) -> Rgb {
+        let _ = (leaf, x, point);
+        b
+    }
 
     /// A leaf's radiosity and exitance under unit irradiance from every direction, without emission (a
     /// patch: B = ρ): the furnace mode the engine's coarse correction removes in one pass.

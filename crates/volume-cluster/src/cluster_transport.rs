@@ -220,6 +220,8 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
     type Irradiance = M::Irradiance;
     type Exitance = M::Exitance;
     type Coefficient = M::Coefficient;
+    type Link = Link;
+    type Flux = Rgb;
 
     fn may_interact(&self, _recv: &ClusterNode<'a>, _src: &ClusterNode<'a>) -> bool {
         true
@@ -331,6 +333,14 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
             ClusterNode::Patch(p) => b[s] * (p.area * p.normal.dot(d).max(0.0)),
             ClusterNode::Cluster(_) => M::cluster_flux(view, b, x, link.source, d),
         }
+    }
+
+    fn weighs_source_leaves(&self, recv: &ClusterNode<'a>, link: &Link) -> bool {
+        PatchKernel::sends_source_radiosity(link) && recv.patch().is_some()
+    }
+
+    fn source_leaf_weight(&self, leaf: &ClusterNode<'a>, recv: &ClusterNode<'a>) -> Option<f64> {
+        Some(self.patches.source_weight(leaf.patch()?, recv.patch()?))
     }
 
     fn deliver(&self, h: &mut M::Irradiance, c: &M::Coefficient, flux: Rgb) {
