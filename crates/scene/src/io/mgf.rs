@@ -947,7 +947,7 @@ fn is_convex(p: &[DVec3]) -> bool {
 }
 
 /// Triangles (corner indices, same winding) of a simple planar polygon by ear clipping (Meisters 1975, "Polygons
-/// have ears"): repeatedly cut off a convex corner whose triangle holds no other corner. A seam (an edge
+/// have ears"): repeatedly cut off a convex corner whose triangle holds no other corner, not even on its edges. A seam (an edge
 /// walked both ways, as MGF draws holes) leaves zero-area ears, which the builder drops. Falls back to a fan if
 /// no ear is found (a self-intersecting polygon).
 fn ear_clip(p: &[DVec3]) -> Vec<[usize; 3]> {
@@ -955,9 +955,9 @@ fn ear_clip(p: &[DVec3]) -> Vec<[usize; 3]> {
     let mut left: Vec<usize> = (0..p.len()).collect();
     let mut out = Vec::with_capacity(p.len() - 2);
     let inside = |q: DVec3, a: DVec3, b: DVec3, c: DVec3| {
-        (b - a).cross(q - a).dot(n) > 0.0
-            && (c - b).cross(q - b).dot(n) > 0.0
-            && (a - c).cross(q - c).dot(n) > 0.0
+        (b - a).cross(q - a).dot(n) >= 0.0
+            && (c - b).cross(q - b).dot(n) >= 0.0
+            && (a - c).cross(q - c).dot(n) >= 0.0
     };
     while left.len() > 3 {
         let m = left.len();
@@ -1027,6 +1027,37 @@ mod tests {
             })
             .sum();
         assert!((area - 3.0).abs() < 1e-12, "{area}");
+        // A 4 × 4 square with a 2 × 2 hole, drawn as MGF draws holes: outer loop, a seam to the hole, the hole
+        // the other way round, back along the seam. Area 12.
+        let p = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+        let holed = [
+            p(0., 0.),
+            p(4., 0.),
+            p(4., 4.),
+            p(0., 4.),
+            p(1., 3.),
+            p(3., 3.),
+            p(3., 1.),
+            p(1., 1.),
+            p(1., 3.),
+            p(0., 4.),
+        ];
+        let tris = ear_clip(&holed);
+        let area: f64 = tris
+            .iter()
+            .map(|t| {
+                0.5 * (holed[t[1]] - holed[t[0]])
+                    .cross(holed[t[2]] - holed[t[0]])
+                    .z
+            })
+            .sum();
+        assert!((area - 12.0).abs() < 1e-12, "{area}: {tris:?}");
+        for t in &tris {
+            let z = (holed[t[1]] - holed[t[0]])
+                .cross(holed[t[2]] - holed[t[0]])
+                .z;
+            assert!(z >= 0.0, "{t:?} is inverted");
+        }
     }
 
     #[test]
