@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 
 use std::path::PathBuf;
 
-use crate::commands::{catalogue, compare, probe, render, solve};
+use crate::commands::{catalogue, compare, export, probe, render, solve};
 use crate::experiment;
 
 /// radlab: radiosity and Monte Carlo methods side by side on the same scenes, measured the same way.
@@ -44,6 +44,9 @@ pub enum Command {
     /// Compare runs' answers at the evaluation points (`runs/<id>.points.csv`): L1, bias, and each pair's
     /// difference with a bootstrap interval.
     Compare(compare::CompareArgs),
+    /// Write the scene for Radiance or Mitsuba 3, with the evaluation points and a script that asks that
+    /// renderer for the radiosity at them (a CSV `radlab compare` reads).
+    Export(export::ExportArgs),
     /// Merge the results of shards (directories of `radlab run --shard`) into one directory.
     Merge {
         /// The merged results directory.
@@ -78,6 +81,7 @@ pub fn main() -> Result<()> {
         Command::Solve(a) => solve::run(a),
         Command::Probe(a) => probe::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Export(a) => export::run(a),
         Command::Render(a) => render::run(a),
         Command::Scenes => {
             catalogue::scenes();

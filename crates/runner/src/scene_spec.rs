@@ -1,4 +1,4 @@
-//! Loading a scene from the command line's SCENE argument: a path (TOML, OBJ, PLY, OFF) or
+//! Loading a scene from the command line's SCENE argument: a path (TOML, OBJ, PLY, OFF, MGF) or
 //! `builtin:NAME[?k=v&...]`, with errors that keep the scene crate's file/line/field detail, and the counted
 //! warnings (dropped degenerate faces, default materials, clamped colours) reported on stderr.
 
@@ -53,5 +53,6 @@ pub fn warning_lines(scene: &Scene, notes: &LoadNotes) -> Vec<String> {
     .into_iter()
     .filter(|(n, _)| *n > 0)
     .map(|(n, what)| format!("{n} {what}"))
+    .chain(notes.unsupported.iter().cloned())
     .collect()
 }

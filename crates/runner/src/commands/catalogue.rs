@@ -11,7 +11,7 @@ fn print_params(params: &[ParamLine]) {
 /// Lists the builtin scenes and the file formats.
 pub fn scenes() {
     println!(
-        "Scenes are files (.toml, .obj with .mtl, .ply, .off; see scenes/README.md) or builtins:\n"
+        "Scenes are files (.toml, .obj with .mtl, .ply, .off, .mgf; see scenes/README.md) or builtins:\n"
     );
     for b in radlab_scene::builtin::builtins() {
         println!("builtin:{}\n    {}", b.name, b.doc);

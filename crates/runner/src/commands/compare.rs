@@ -7,6 +7,13 @@
 //! (the points, the reference's noise at each point) largely cancels. A resample is a weighting of the points
 //! by how often each was drawn, so each resample's errors are the same metric with those weights.
 //!
+//! Besides runs' points files, compare reads answers at points as `radlab probe` prints them and as the scripts
+//! of `radlab export` write them (columns `x,y,z,r,g,b` and optionally `se_r,se_g,se_b`): such a file's values
+//! are its own reference, and its standard errors are its own. Files are matched row by row at equal x, y, z.
+//! When a run carries its own standard errors, its z uses both: z = (B − R) / √(s_R² + s_B²), so two
+//! independent Monte Carlo answers that agree have mean z² about 1 (the cross-checks against Radiance and
+//! Mitsuba: `radlab compare radiance.csv mitsuba.csv --reference radlab.csv`).
+//!
 //! `--reference R.points.csv` measures every run against R's reference instead of its own (the same points,
 //! checked: the reference's cache is keyed by its path count, so a sharper reference for points already
 //! answered is one `radlab run` of a quick method with more `[reference] samples`). Without it the runs must
@@ -50,13 +57,26 @@ pub struct PointAnswer {
     pub std_error: Rgb,
     /// The run's answer.
     pub value: Rgb,
+    /// The run's own standard error (zero for a runs/<id>.points.csv, whose answers are deterministic or
+    /// whose error is the point of the comparison).
+    pub own_std_error: Rgb,
 }
+
+/// The face of a point read from a file that does not name faces (probe and export answers).
+pub const UNKNOWN_FACE: usize = usize::MAX;
 
 /// Reads a points file. Errors name the file and the data row (1-based, header excluded).
 pub fn read_points(path: &Path) -> Result<Vec<PointAnswer>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let mut rdr = csv::Reader::from_reader(text.as_bytes());
+    let header = rdr
+        .headers()
+        .with_context(|| format!("{}: cannot read the header", path.display()))?
+        .clone();
+    if !header.iter().any(|h| h == "ref_r") && header.iter().any(|h| h == "r") {
+        return read_probe_answers(path, &text);
+    }
     let mut out = Vec::new();
     for (i, rec) in rdr.deserialize::<PointRow>().enumerate() {
         let row = i + 1;
@@ -94,6 +114,67 @@ pub fn read_points(path: &Path) -> Result<Vec<PointAnswer>> {
             reference: Rgb::new(r.ref_r, r.ref_g, r.ref_b),
             std_error: Rgb::new(r.se_r, r.se_g, r.se_b),
             value: Rgb::new(r.r, r.g, r.b),
+            own_std_error: Rgb::ZERO,
+        });
+    }
+    if out.is_empty() {
+        bail!("{}: no points", path.display());
+    }
+    Ok(out)
+}
+
+/// Reads answers at points (`x,y,z,r,g,b[,se_r,se_g,se_b]`: `radlab probe`'s output, the export scripts'):
+/// each value is its own reference, with its own standard error (zero without `se_*` columns).
+fn read_probe_answers(path: &Path, text: &str) -> Result<Vec<PointAnswer>> {
+    let mut rdr = csv::Reader::from_reader(text.as_bytes());
+    let header = rdr.headers()?.clone();
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let need = ["x", "y", "z", "r", "g", "b"];
+    let cols: Vec<usize> = need
+        .iter()
+        .map(|n| {
+            col(n).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: column {n} is missing; an answers file has columns x,y,z,r,g,b[,se_r,se_g,se_b]",
+                    path.display()
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    let se_cols = match (col("se_r"), col("se_g"), col("se_b")) {
+        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+        _ => None,
+    };
+    let mut out = Vec::new();
+    for (i, rec) in rdr.records().enumerate() {
+        let row = i + 1;
+        let rec = rec.with_context(|| format!("{}: row {row}: malformed CSV", path.display()))?;
+        let num = |c: usize| -> Result<f64> {
+            let s = rec.get(c).unwrap_or("");
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "{}: row {row}: column {}: '{s}' is not a finite number",
+                        path.display(),
+                        header.get(c).unwrap_or("?")
+                    )
+                })
+        };
+        let v: Vec<f64> = cols.iter().map(|&c| num(c)).collect::<Result<_>>()?;
+        let se = match se_cols {
+            Some([a, b, c]) => Rgb::new(num(a)?, num(b)?, num(c)?),
+            None => Rgb::ZERO,
+        };
+        let value = Rgb::new(v[3], v[4], v[5]);
+        out.push(PointAnswer {
+            face: UNKNOWN_FACE,
+            at: [v[0], v[1], v[2]],
+            reference: value,
+            std_error: se,
+            value,
+            own_std_error: se,
         });
     }
     if out.is_empty() {
@@ -110,7 +191,8 @@ pub struct RunSummary {
     /// Signed mean error Σ Σ_c (B − R) / Σ Σ_c |R|: the L1 of a bias that is all one sign.
     pub signed: f64,
     /// Mean of ((B − R)/s)² over points and channels with s > 0; `None` if the reference has no standard
-    /// errors (analytic). About 1 when the run's error is the reference's noise alone.
+    /// errors (analytic). About 1 when the run's error is the reference's noise alone. Where the run has its own
+    /// standard error s_B, s = √(s_R² + s_B²).
     pub mean_z2: Option<f64>,
     /// Relative L1 within each quarter of the points by reference radiosity (channel mean), darkest first.
     pub quartiles: [f64; 4],
@@ -136,6 +218,8 @@ pub struct Comparison {
     pub std_error: Vec<Rgb>,
     /// Each run's answers.
     pub values: Vec<Vec<Rgb>>,
+    /// Each run's own standard errors (zero where it has none).
+    pub own_std_error: Vec<Vec<Rgb>>,
 }
 
 impl Comparison {
@@ -147,7 +231,13 @@ impl Comparison {
 
     /// Run `k` measured against the reference.
     pub fn summary(&self, k: usize) -> RunSummary {
-        let (v, r, s) = (&self.values[k], &self.reference, &self.std_error);
+        let (v, r) = (&self.values[k], &self.reference);
+        let s: Vec<Rgb> = self
+            .std_error
+            .iter()
+            .zip(&self.own_std_error[k])
+            .map(|(a, b)| (*a * *a + *b * *b).map(f64::sqrt))
+            .collect();
         let n = r.len();
         let ones = vec![1.0; n];
         let l1 = error_metric::errors(v, r, &ones).l1;
@@ -159,7 +249,7 @@ impl Comparison {
             .sum::<f64>()
             / total;
         let (mut z2, mut count) = (0.0, 0usize);
-        for ((a, b), e) in v.iter().zip(r).zip(s) {
+        for ((a, b), e) in v.iter().zip(r).zip(&s) {
             for c in 0..3 {
                 if e[c] > 0.0 {
                     z2 += ((a[c] - b[c]) / e[c]).powi(2);
@@ -250,7 +340,8 @@ pub fn assemble(
             );
         }
         for (i, (p, q)) in points.iter().zip(refs).enumerate() {
-            if p.face != q.face || p.at != q.at {
+            let faces_differ = p.face != q.face && p.face != UNKNOWN_FACE && q.face != UNKNOWN_FACE;
+            if faces_differ || p.at != q.at {
                 bail!(
                     "{name} and {ref_name} differ at row {}: point on face {} at {:?} against face {} at \
                      {:?}; compare runs of the same `[evaluation]` points",
@@ -277,6 +368,10 @@ pub fn assemble(
             .iter()
             .map(|(_, p)| p.iter().map(|x| x.value).collect())
             .collect(),
+        own_std_error: runs
+            .iter()
+            .map(|(_, p)| p.iter().map(|x| x.own_std_error).collect())
+            .collect(),
     })
 }
 
@@ -287,6 +382,7 @@ fn label(path: &Path) -> String {
         |f| f.to_string_lossy().into_owned(),
     );
     name.strip_suffix(".points.csv")
+        .or_else(|| name.strip_suffix(".csv"))
         .map_or(name.clone(), str::to_owned)
 }
 
@@ -377,6 +473,7 @@ mod tests {
                 reference: Rgb::splat(r),
                 std_error: Rgb::splat(se),
                 value: Rgb::splat(v),
+                own_std_error: Rgb::ZERO,
             })
             .collect()
     }
@@ -450,6 +547,38 @@ mod tests {
         let c = assemble(&runs, Some(("sharp", &refp))).expect("same points");
         assert_eq!(c.summary(0).l1, 0.0);
         assert_eq!(c.std_error[0], Rgb::splat(0.05));
+    }
+
+    #[test]
+    fn answers_files_are_their_own_reference_and_z_uses_both_errors() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let a = dir.path().join("radiance.csv");
+        let b = dir.path().join("radlab.csv");
+        std::fs::write(
+            &a,
+            "x,y,z,r,g,b,se_r,se_g,se_b\n0,0,0,1.3,1,1,0.3,0,0\n1,0,0,2,2,2,0,0,0\n",
+        )
+        .expect("write");
+        std::fs::write(
+            &b,
+            "x,y,z,r,g,b,se_r,se_g,se_b\n0,0,0,1,1,1,0.4,0,0\n1,0,0,2,2,2,0.1,0.1,0.1\n",
+        )
+        .expect("write");
+        let (ra, rb) = (read_points(&a).expect("a"), read_points(&b).expect("b"));
+        assert_eq!(ra[0].face, UNKNOWN_FACE);
+        assert_eq!(ra[0].std_error, Rgb::new(0.3, 0.0, 0.0));
+        let c = assemble(&[("radiance".into(), ra)], Some(("radlab", &rb))).expect("same points");
+        let s = c.summary(0);
+        // Point 1, red: z = 0.3 / √(0.4² + 0.3²) = 0.6; every other channel with s > 0 has z = 0.
+        assert!(
+            (s.mean_z2.expect("errors") - 0.36 / 4.0).abs() < 1e-12,
+            "{s:?}"
+        );
+        assert!((s.l1 - 0.3 / 9.0).abs() < 1e-12);
+        // A file without either format's columns is refused, naming them.
+        std::fs::write(&a, "x,y,z,r,g\n0,0,0,1,1\n").expect("write");
+        let e = read_points(&a).expect_err("refused").to_string();
+        assert!(e.contains("column b is missing"), "{e}");
     }
 
     #[test]

@@ -2,6 +2,7 @@
 
 pub mod catalogue;
 pub mod compare;
+pub mod export;
 pub mod probe;
 pub mod render;
 pub mod solve;

@@ -17,7 +17,7 @@ use crate::{methods, progress, scene_spec};
 /// Options shared by solve, probe and render.
 #[derive(Clone, Debug, clap::Args)]
 pub struct MethodArgs {
-    /// The scene: a file (.toml, .obj, .ply, .off) or builtin:NAME[?k=v&...] (see `radlab scenes`).
+    /// The scene: a file (.toml, .obj, .ply, .off, .mgf) or builtin:NAME[?k=v&...] (see `radlab scenes`).
     pub scene: String,
     /// The method (see `radlab methods`).
     #[arg(long, short)]

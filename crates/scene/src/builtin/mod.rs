@@ -6,9 +6,12 @@ mod cornell;
 mod detailed_meshes;
 mod furnace_sphere;
 pub(crate) mod primitives;
-mod spectrum_rgb;
+pub(crate) mod spectrum_rgb;
 
 pub use cornell::{cornell_fov_deg, cornell_light_exitance, cornell_reflectances};
+pub use spectrum_rgb::{
+    linear_srgb_to_xyz, reflectance_rgb_from_xyz, reflectance_xyz_from_rgb, xyy_to_xyz,
+};
 
 use glam::DVec3;
 

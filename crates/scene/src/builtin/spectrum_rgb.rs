@@ -8,8 +8,15 @@
 //! A reflectance spectrum ρ(λ) seen under a light S(λ) becomes the per-channel ratio
 //! ρ_c = RGB_c(ρ S) / RGB_c(S), so an RGB renderer reproduces exactly the first bounce of that light off that
 //! surface. The colour-matching table is CIE 1931 at 5 nm (CIE 015:2004, table T.4), 400–700 nm.
+//!
+//! Colours given as CIE chromaticity (x, y) and luminance Y (as MGF gives them: Ward 1995, "The Materials and
+//! Geometry Format") use the same matrix. XYZ = (x Y / y, Y, (1 − x − y) Y / y). An emitter's exitance is
+//! E = M · XYZ. A reflectance follows the ratio rule above under the equal-energy white that MGF's
+//! reflectances are defined against (XYZ_E = (1, 1, 1)): ρ_c = (M · XYZ_ρ)_c / (M · (1, 1, 1))_c, so a neutral
+//! colour (x = y = 1/3) of reflectance Y is Y in every channel. [`linear_srgb_to_xyz`] inverts M exactly
+//! (to round-off), so RGB → (x, y, Y) → RGB returns what it was given.
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// First wavelength of [`CIE_1931_5NM`], nm.
 const CMF_START: f64 = 400.0;
@@ -101,6 +108,61 @@ pub(crate) fn xyz_of_product(spectra: &[Spectrum]) -> DVec3 {
     sum / Y_INTEGRAL
 }
 
+/// The matrix M of [`XYZ_TO_SRGB`] as a glam matrix.
+fn srgb_matrix() -> DMat3 {
+    DMat3::from_cols_array_2d(&XYZ_TO_SRGB).transpose()
+}
+
+/// CIE XYZ of chromaticity (x, y) at luminance `big_y`; `y` must be positive.
+pub fn xyy_to_xyz(x: f64, y: f64, big_y: f64) -> DVec3 {
+    DVec3::new(x * big_y / y, big_y, (1.0 - x - y) * big_y / y)
+}
+
+/// CIE XYZ of a linear sRGB triple: M⁻¹ · rgb.
+pub fn linear_srgb_to_xyz(rgb: DVec3) -> DVec3 {
+    srgb_matrix().inverse() * rgb
+}
+
+/// Linear sRGB reflectance of a surface whose reflected colour under equal-energy white is `xyz`:
+/// (M · XYZ)_c / (M · (1, 1, 1))_c per channel (see the module doc). Not clamped.
+pub fn reflectance_rgb_from_xyz(xyz: DVec3) -> DVec3 {
+    let m = srgb_matrix();
+    (m * xyz) / (m * DVec3::ONE)
+}
+
+/// The XYZ a linear sRGB reflectance has under equal-energy white: the inverse of
+/// [`reflectance_rgb_from_xyz`].
+pub fn reflectance_xyz_from_rgb(rgb: DVec3) -> DVec3 {
+    let m = srgb_matrix();
+    m.inverse() * (rgb * (m * DVec3::ONE))
+}
+
+/// Chromaticity (x, y) of a spectrum tabulated from `start` nm every `step` nm (zero outside), or `None` if
+/// it has no colour in 400–700 nm.
+pub fn spectrum_xy(start: f64, step: f64, values: &[f64]) -> Option<(f64, f64)> {
+    let xyz = xyz_of_product(&[Spectrum {
+        start,
+        step,
+        values,
+    }]);
+    let sum = xyz.element_sum();
+    (sum > 0.0 && xyz.is_finite()).then(|| (xyz.x / sum, xyz.y / sum))
+}
+
+/// Chromaticity (x, y) of a black body at `kelvin` (Planck's law, tabulated every 5 nm over 400–700 nm).
+pub fn blackbody_xy(kelvin: f64) -> Option<(f64, f64)> {
+    // Planck: M(λ) ∝ λ⁻⁵ / (exp(c₂ / (λ T)) − 1), c₂ = 1.438777e7 nm·K; the scale cancels in (x, y).
+    let c2 = 1.438_777e7;
+    let values: Vec<f64> = (0..=60)
+        .map(|k| {
+            let nm = 400.0 + 5.0 * k as f64;
+            let r = nm / 550.0;
+            1.0 / (r.powi(5) * ((c2 / (nm * kelvin)).exp_m1()))
+        })
+        .collect();
+    spectrum_xy(400.0, 5.0, &values)
+}
+
 /// Linear sRGB of an XYZ triple.
 pub(crate) fn xyz_to_linear_srgb(xyz: DVec3) -> DVec3 {
     let m = XYZ_TO_SRGB;
@@ -153,6 +215,52 @@ mod tests {
         // Illuminant E has x = y = 1/3.
         let sum = xyz.x + xyz.y + xyz.z;
         assert!((xyz.x / sum - 1.0 / 3.0).abs() < 3e-3 && (xyz.y / sum - 1.0 / 3.0).abs() < 3e-3);
+    }
+
+    #[test]
+    fn chromaticity_conversions_round_trip_and_keep_neutral_grey() {
+        // Equal-energy white at reflectance 0.4 is 0.4 in every channel.
+        let grey = reflectance_rgb_from_xyz(xyy_to_xyz(1.0 / 3.0, 1.0 / 3.0, 0.4));
+        assert!(
+            (grey - DVec3::splat(0.4)).abs().max_element() < 1e-12,
+            "{grey}"
+        );
+        // RGB → XYZ → RGB, for a reflectance and for an exitance.
+        let rgb = DVec3::new(0.6, 0.07, 0.05);
+        let back = reflectance_rgb_from_xyz(reflectance_xyz_from_rgb(rgb));
+        assert!((back - rgb).abs().max_element() < 1e-12, "{back}");
+        let e = DVec3::new(17.0, 12.0, 4.0);
+        assert!(
+            (xyz_to_linear_srgb(linear_srgb_to_xyz(e)) - e)
+                .abs()
+                .max_element()
+                < 1e-12
+        );
+        // The sRGB red primary (IEC 61966-2-1: x = 0.64, y = 0.33) has G = B = 0 to the matrix's 4 digits.
+        let red = xyz_to_linear_srgb(xyy_to_xyz(0.64, 0.33, 0.2126));
+        assert!(
+            red.y.abs() < 2e-3 && red.z.abs() < 2e-3 && (red.x - 1.0).abs() < 3e-3,
+            "{red}"
+        );
+        // D65 (x = 0.3127, y = 0.3290) at Y = 1 is white: R = G = B = 1 to the matrix's 4 digits.
+        let d65 = xyz_to_linear_srgb(xyy_to_xyz(0.3127, 0.3290, 1.0));
+        assert!((d65 - DVec3::ONE).abs().max_element() < 2e-3, "{d65}");
+    }
+
+    #[test]
+    fn blackbody_chromaticity_matches_the_planckian_locus() {
+        // CIE 015:2004: the Planckian locus at 2856 K (illuminant A) is x = 0.4476, y = 0.4074; at 6504 K about
+        // (0.3135, 0.3237). The 400–700 nm window moves them by a few thousandths.
+        let (x, y) = blackbody_xy(2856.0).expect("colour");
+        assert!(
+            (x - 0.4476).abs() < 5e-3 && (y - 0.4074).abs() < 5e-3,
+            "{x} {y}"
+        );
+        let (x, y) = blackbody_xy(6504.0).expect("colour");
+        assert!(
+            (x - 0.3135).abs() < 5e-3 && (y - 0.3237).abs() < 5e-3,
+            "{x} {y}"
+        );
     }
 
     #[test]

@@ -7,10 +7,12 @@
 //! | `.obj` | Wavefront OBJ with MTL materials (`Kd` → reflectance, `Ke` → emission as exitance, W/m²) | [`obj_mtl`] (tobj) |
 //! | `.ply` | PLY, ASCII or binary either endianness; vertex or face colours → reflectance | [`ply_mesh`] (ply-rs-bw) |
 //! | `.off` | Object File Format (the CGAL demo meshes) | [`off_mesh`] |
+//! | `.mgf` | Materials and Geometry Format (the radiosity literature's scenes; includes, transforms, primitives) | [`mgf`] |
 //!
 //! Every error names the file and, where the format has lines, the line; nothing is half-built. Problems that
 //! are not errors are counted: degenerate faces in [`crate::SceneWarnings`], the rest in [`LoadNotes`].
 
+pub mod mgf;
 pub mod obj_mtl;
 pub mod off_mesh;
 pub mod ply_mesh;
@@ -46,6 +48,9 @@ pub struct LoadNotes {
     pub clamped_colour_faces: usize,
     /// OBJ point (`p`) and line (`l`) elements skipped: they are not surfaces.
     pub skipped_points_and_lines: usize,
+    /// Entities read but not supported (MGF's specular and transmitting materials, for instance): one
+    /// message each, naming the file and line of its first occurrence.
+    pub unsupported: Vec<String>,
 }
 
 impl LoadNotes {
@@ -59,13 +64,18 @@ impl LoadNotes {
         self.materials_without_kd += o.materials_without_kd;
         self.clamped_colour_faces += o.clamped_colour_faces;
         self.skipped_points_and_lines += o.skipped_points_and_lines;
+        for u in &o.unsupported {
+            if !self.unsupported.contains(u) {
+                self.unsupported.push(u.clone());
+            }
+        }
     }
 }
 
 /// The file extensions `load_scene` accepts.
-pub const SCENE_EXTENSIONS: [&str; 4] = ["toml", "obj", "ply", "off"];
+pub const SCENE_EXTENSIONS: [&str; 5] = ["toml", "obj", "ply", "off", "mgf"];
 
-/// Loads a scene from `builtin:NAME[?k=v&...]` or a `.toml`, `.obj`, `.ply` or `.off` file.
+/// Loads a scene from `builtin:NAME[?k=v&...]` or a `.toml`, `.obj`, `.ply`, `.off` or `.mgf` file.
 pub fn load_scene(spec: &str) -> Result<Scene, SceneError> {
     load_scene_with_notes(spec).map(|(s, _)| s)
 }
@@ -79,6 +89,7 @@ pub fn load_scene_with_notes(spec: &str) -> Result<(Scene, LoadNotes), SceneErro
     let ext = extension(path);
     match ext.as_str() {
         "toml" => toml_scene::load_toml_scene(path),
+        "mgf" => mgf::load_mgf(path),
         "obj" | "ply" | "off" => {
             let mesh = read_mesh(path)?;
             let name = path
@@ -91,7 +102,7 @@ pub fn load_scene_with_notes(spec: &str) -> Result<(Scene, LoadNotes), SceneErro
         _ => Err(SceneError::Invalid {
             field: spec.to_string(),
             message: format!(
-                "unknown scene file extension '{}'; give a .toml, .obj, .ply or .off file, or builtin:NAME \
+                "unknown scene file extension '{}'; give a .toml, .obj, .ply, .off or .mgf file, or builtin:NAME \
                  (see `radlab scenes`)",
                 if ext.is_empty() { "(none)" } else { &ext }
             ),

@@ -1,0 +1,231 @@
+//! Exchange formats end to end: an MGF furnace solved by matrix radiosity gives B = E/(1 − ρ); the Cornell box
+//! as MGF gives builtin:cornell's matrix radiosity face by face; `radlab export` writes complete Radiance and
+//! Mitsuba scenes whose numbers are the scene's (polygons, E/π, triangles), and nothing on failure. The
+//! cross-checks against the renderers themselves need Radiance or Mitsuba installed and are documented in
+//! scenes/README.md; they are not run here (CI has neither).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn radlab(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_radlab"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("radlab runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn csv_rows(bytes: &[u8]) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_reader(bytes);
+    let h = r
+        .headers()
+        .expect("header")
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let rows = r
+        .records()
+        .map(|x| x.expect("row").iter().map(str::to_string).collect())
+        .collect();
+    (h, rows)
+}
+
+#[test]
+fn mgf_furnace_solves_to_e_over_one_minus_rho() {
+    // A closed box (a prism facing in), rd 0.8 neutral, ed 1 neutral: ρ = 0.8 in every channel,
+    // E = M·(1, 1, 1) = (1.2049, 0.9484, 0.9091), so B = 5 E.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let scene = tmp.path().join("furnace.mgf");
+    std::fs::write(
+        &scene,
+        "m f =\n rd .8\n ed 1\nv a =\n p 0 0 0\nv b =\n p 0 1 0\nv c =\n p 1 1 0\nv d =\n p 1 0 0\n\
+         xf -s 2\nprism a b c d -1\nxf\n",
+    )
+    .expect("write");
+    let points = tmp.path().join("p.csv");
+    std::fs::write(
+        &points,
+        "x,y,z\n1,1,0\n0.5,1.5,-2\n0,0.3,-1.2\n2,1.9,-0.1\n",
+    )
+    .expect("points");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "probe",
+            scene.to_str().expect("utf8"),
+            "--method",
+            "matrix",
+            "--points",
+            points.to_str().expect("utf8"),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let (_, rows) = csv_rows(&o.stdout);
+    assert_eq!(rows.len(), 4);
+    let e = [1.2049, 0.9484, 0.9091];
+    for r in rows {
+        for c in 0..3 {
+            let b: f64 = r[3 + c].parse().expect("number");
+            // E to the 4 digits of the sRGB matrix; the solve to its own tolerance.
+            assert!((b / (5.0 * e[c]) - 1.0).abs() < 1e-3, "{r:?}");
+        }
+    }
+}
+
+#[test]
+fn cornell_mgf_has_builtin_cornells_matrix_radiosity() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mut faces = Vec::new();
+    for (name, scene) in [
+        ("builtin", "builtin:cornell?width=8&height=8".to_string()),
+        (
+            "mgf",
+            repo()
+                .join("scenes/cornell.mgf")
+                .to_string_lossy()
+                .into_owned(),
+        ),
+    ] {
+        let out = tmp.path().join(name);
+        let o = radlab(
+            tmp.path(),
+            &[
+                "solve",
+                &scene,
+                "--method",
+                "matrix",
+                "--set",
+                "visibility=centre",
+                "--set",
+                "element_size=150",
+                "--out",
+                out.to_str().expect("utf8"),
+            ],
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        faces.push(csv_rows(&std::fs::read(out.join("faces.csv")).expect("faces.csv")).1);
+    }
+    assert_eq!(faces[0].len(), faces[1].len());
+    for (a, b) in faces[0].iter().zip(&faces[1]) {
+        for c in [2, 9, 10, 11] {
+            let (x, y): (f64, f64) = (a[c].parse().expect("n"), b[c].parse().expect("n"));
+            assert!(
+                (x - y).abs() <= 1e-9 * x.abs().max(1e-12),
+                "face {}: {x} against {y}",
+                a[0]
+            );
+        }
+    }
+}
+
+#[test]
+fn export_writes_complete_radiance_and_mitsuba_scenes() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let scene = radlab_scene::load_scene("builtin:cornell").expect("cornell");
+    let rad = tmp.path().join("rad");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "export",
+            "builtin:cornell",
+            "--to",
+            "radiance",
+            "--out",
+            rad.to_str().expect("utf8"),
+            "--points",
+            "50",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let r = std::fs::read_to_string(rad.join("scene.rad")).expect("scene.rad");
+    assert_eq!(r.matches(" polygon f").count(), scene.faces.len());
+    assert_eq!(r.matches("void plastic").count(), 3);
+    // The light: radiance E/π per channel.
+    let e = radlab_scene::builtin::cornell_light_exitance() / std::f64::consts::PI;
+    assert!(r.contains(&format!(
+        "void light mat_3\n0\n0\n3 {} {} {}",
+        e.x, e.y, e.z
+    )));
+    let (h, rows) = csv_rows(&std::fs::read(rad.join("points.csv")).expect("points"));
+    assert_eq!(rows.len(), 50);
+    assert_eq!(&h[..8], ["point", "face", "x", "y", "z", "nx", "ny", "nz"]);
+    assert!(rad.join("radiance-points.py").exists());
+
+    let mi = tmp.path().join("mi");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "export",
+            "builtin:cornell",
+            "--to",
+            "mitsuba",
+            "--out",
+            mi.to_str().expect("utf8"),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let xml = std::fs::read_to_string(mi.join("scene.xml")).expect("scene.xml");
+    assert_eq!(xml.matches("<shape type=\"ply\"").count(), 4);
+    assert_eq!(xml.matches("<emitter type=\"area\">").count(), 1);
+    assert!(xml.contains("<lookat origin=\"278, 273, -800\""));
+    // Each PLY holds its material's faces as triangles (quads split in two).
+    for k in 0..4u32 {
+        let ply = std::fs::read(mi.join(format!("mat_{k}.ply"))).expect("ply");
+        let head = String::from_utf8_lossy(&ply[..200.min(ply.len())]).into_owned();
+        let tris: usize = scene
+            .faces
+            .iter()
+            .filter(|f| f.material == k)
+            .map(|f| f.vertex_count() - 2)
+            .sum();
+        assert!(
+            head.contains(&format!("element face {tris}\n")),
+            "mat_{k}: {head}"
+        );
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
+        .expect("dir")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "staging left behind: {leftovers:?}");
+
+    // An output path below a regular file cannot be created: an error, and nothing written.
+    let blocker = tmp.path().join("blocker");
+    std::fs::write(&blocker, "x").expect("write");
+    let o = radlab(
+        tmp.path(),
+        &[
+            "export",
+            "builtin:cornell",
+            "--to",
+            "radiance",
+            "--out",
+            blocker.join("out").to_str().expect("utf8"),
+        ],
+    );
+    assert!(!o.status.success());
+    assert!(text(&o).contains("cannot create directory"), "{}", text(&o));
+    let left: Vec<_> = std::fs::read_dir(tmp.path())
+        .expect("dir")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        left.iter()
+            .all(|n| ["rad", "mi", "blocker"].contains(&n.as_str())),
+        "{left:?}"
+    );
+}
