@@ -140,6 +140,30 @@ pub fn methods() -> Vec<MethodInfo> {
             },
             validate: |table| radlab_pathtrace::PathTraceParams::from_table(table).map(|_| ()),
         },
+        MethodInfo {
+            name: "irradiance-cache",
+            summary: "Ward's irradiance cache (Ward, Rubinstein & Clear 1988; Ward & Heckbert 1992 gradients; \
+                 Krivanek et al. 2006 neighbour clamping) at the points asked about: direct light by next-event \
+                 estimation at every point, indirect irradiance from records gathered by stratified hemisphere \
+                 sampling (paths continued by Russian roulette) and interpolated while Ward's error is below \
+                 the accuracy a; built in deterministic passes over the points. Pays when the points are many.",
+            params: param_lines::<radlab_irradiance_cache::IrradianceCacheParams>,
+            build: |scene, accel, table, seed, points| {
+                let params = radlab_irradiance_cache::IrradianceCacheParams::from_table(table)?;
+                let points = points
+                    .iter()
+                    .map(radlab_pathtrace::SurfacePoint::from)
+                    .collect();
+                Ok(Box::new(
+                    radlab_irradiance_cache::IrradianceCacheSolver::new(
+                        scene, accel, params, seed, points,
+                    )?,
+                ))
+            },
+            validate: |table| {
+                radlab_irradiance_cache::IrradianceCacheParams::from_table(table).map(|_| ())
+            },
+        },
     ]
 }
 
