@@ -164,6 +164,26 @@ pub fn methods() -> Vec<MethodInfo> {
                 radlab_irradiance_cache::IrradianceCacheParams::from_table(table).map(|_| ())
             },
         },
+        MethodInfo {
+            name: "photon-map",
+            summary: "Photon maps (Jensen 1996; Christensen 1999) at the points asked about: photons from the \
+                 emitters with Russian roulette, k-nearest-neighbour density estimates over a kiddo k-d tree; \
+                 mode = final-gather (direct light by next-event estimation, one gather bounce reading \
+                 precomputed irradiance) or progressive (Hachisuka, Ogaki & Jensen 2008: radius shrinking per \
+                 pass, consistent). Biased by the density estimate near edges and on relief.",
+            params: param_lines::<radlab_photon_map::PhotonMapParams>,
+            build: |scene, accel, table, seed, points| {
+                let params = radlab_photon_map::PhotonMapParams::from_table(table)?;
+                let points = points
+                    .iter()
+                    .map(radlab_pathtrace::SurfacePoint::from)
+                    .collect();
+                Ok(Box::new(radlab_photon_map::PhotonMapSolver::new(
+                    scene, accel, params, seed, points,
+                )?))
+            },
+            validate: |table| radlab_photon_map::PhotonMapParams::from_table(table).map(|_| ()),
+        },
     ]
 }
 

@@ -146,6 +146,20 @@ fn settings(method: &str) -> Settings {
             seeds: 4,
             balance: 0.2,
         },
+        // 4 runs of the final gather: 20,000 photons, 32 gather rays and 8 direct samples per point. The
+        // density estimate is biased near edges, one bounce removed from the answer; no closed-form bound on
+        // that bias is derived here, so the balance is held to the generic 1 %.
+        "photon-map" => Settings {
+            params: |_| {
+                table(&[
+                    ("photons", 20000.into()),
+                    ("gather_samples", 32.into()),
+                    ("direct_samples", 8.into()),
+                ])
+            },
+            seeds: 4,
+            balance: 1e-2,
+        },
         // Defaults (α transfer, power norm, ε = 1e-4). Cluster links are point approximations whose row sums are
         // not exact; on these small closed rooms the refinement reaches patch links almost everywhere, so the
         // generic 1% balance applies.
