@@ -16,7 +16,7 @@
 //! | `filter` | cone | `cone` (k_c = 1) or `epanechnikov` |
 //! | `gather_samples` | 64 | final-gather rays per query point |
 //! | `precompute_stride` | 4 | irradiance precomputed at every n-th photon |
-//! | `direct_samples` | 16 | direct-light samples per query point |
+//! | `direct_samples` | 64 | direct-light samples per query point |
 //! | `passes`, `alpha`, `initial_radius` | 16, 0.7, 0.02 | progressive: passes, α, R₀ / scene diagonal |
 //! | `leak_test` | true | one ray per photon (progressive) or irradiance point (gather) used |
 //! | `max_depth`, `direct` | 100000, mis | photon reflections cap; direct-light sampling |

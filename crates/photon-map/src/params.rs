@@ -39,7 +39,7 @@ pub struct PhotonMapParams {
     pub gather_samples: u32,
     /// Irradiance is precomputed at every `precompute_stride`-th photon (default 4; Christensen 1999).
     pub precompute_stride: u32,
-    /// Direct-light samples per query point (default 16), radlab-pathtrace's estimator.
+    /// Direct-light samples per query point (default 64, as the irradiance cache), radlab-pathtrace's estimator.
     pub direct_samples: u32,
     /// Progressive: photon passes (default 16), one per step.
     pub passes: u32,
@@ -65,7 +65,7 @@ impl Default for PhotonMapParams {
             filter: DensityFilter::Cone,
             gather_samples: 64,
             precompute_stride: 4,
-            direct_samples: 16,
+            direct_samples: 64,
             passes: 16,
             alpha: 0.7,
             initial_radius: 0.02,
