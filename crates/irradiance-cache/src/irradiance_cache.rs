@@ -45,7 +45,7 @@ use crate::record_octree::RecordOctree;
 pub const GATHER_STREAM_TAG: u64 = 0x6972_7261_6463_6163; // "irradcac"
 /// Mixed into the seed for the direct light at answered points.
 const DIRECT_STREAM_TAG: u64 = 0x6972_6469_7265_6374; // "irdirect"
-/// Stream offset for points off the query set (keyed by coordinates, far from any point index).
+/// Marks a query point that has no record of its own.
 const NO_RECORD: u32 = u32::MAX;
 
 /// One irradiance record.
@@ -119,6 +119,8 @@ fn point_key(face: FaceId, p: DVec3) -> (FaceId, [u64; 3]) {
     (face, [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
 }
 
+/// The random stream of a point off the query set: a hash of its face and coordinates with the top bit set, so
+/// it never coincides with a query point's index.
 fn coordinate_stream(face: FaceId, p: DVec3) -> u64 {
     mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits() ^ face as u64))) | 1 << 63
 }

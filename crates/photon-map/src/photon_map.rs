@@ -115,6 +115,8 @@ fn point_key(face: FaceId, p: DVec3) -> (FaceId, [u64; 3]) {
     (face, [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
 }
 
+/// The random stream of a point off the query set: a hash of its face and coordinates with the top bit set, so
+/// it never coincides with a query point's index.
 fn coordinate_stream(face: FaceId, p: DVec3) -> u64 {
     mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits() ^ face as u64))) | 1 << 63
 }

@@ -147,49 +147,47 @@ fn trace_one(
     keep: &(dyn Fn(u32) -> bool + Sync),
     out: &mut Vec<Photon>,
 ) {
-    {
-        let mut rng = sampling::rng(seed, index);
-        let (u0, u1, u2) = (
-            sampling::uniform(&mut rng),
+    let mut rng = sampling::rng(seed, index);
+    let (u0, u1, u2) = (
+        sampling::uniform(&mut rng),
+        sampling::uniform(&mut rng),
+        sampling::uniform(&mut rng),
+    );
+    let Some(light) = emitters.sample(u0, u1, u2) else {
+        return;
+    };
+    let mut power = scene.emission(light.face) / light.pdf_area;
+    let (mut face, mut x) = (light.face, light.point);
+    let mut n = scene.faces[face].normal;
+    for bounces in 0..max_depth {
+        let dir = sampling::cosine_hemisphere(
+            n,
             sampling::uniform(&mut rng),
             sampling::uniform(&mut rng),
         );
-        let Some(light) = emitters.sample(u0, u1, u2) else {
-            return;
+        let Some(hit) = accel.intersect_from(face, x, dir) else {
+            break;
         };
-        let mut power = scene.emission(light.face) / light.pdf_area;
-        let (mut face, mut x) = (light.face, light.point);
-        let mut n = scene.faces[face].normal;
-        for bounces in 0..max_depth {
-            let dir = sampling::cosine_hemisphere(
-                n,
-                sampling::uniform(&mut rng),
-                sampling::uniform(&mut rng),
-            );
-            let Some(hit) = accel.intersect_from(face, x, dir) else {
-                break;
-            };
-            let nh = scene.faces[hit.face].normal;
-            if !(-nh.dot(dir) > 0.0) {
-                break; // a back: absorbed
-            }
-            if keep(bounces) {
-                out.push(Photon {
-                    point: hit.point,
-                    normal: nh,
-                    face: hit.face,
-                    toward_source: -dir,
-                    power,
-                    bounces,
-                });
-            }
-            let reflected = power * scene.reflectance(hit.face);
-            let q = (reflected.max_element() / power.max_element()).min(1.0);
-            if !(q > 0.0) || sampling::uniform(&mut rng) >= q {
-                break;
-            }
-            power = reflected / q;
-            (face, x, n) = (hit.face, hit.point, nh);
+        let nh = scene.faces[hit.face].normal;
+        if !(-nh.dot(dir) > 0.0) {
+            break; // a back: absorbed
         }
+        if keep(bounces) {
+            out.push(Photon {
+                point: hit.point,
+                normal: nh,
+                face: hit.face,
+                toward_source: -dir,
+                power,
+                bounces,
+            });
+        }
+        let reflected = power * scene.reflectance(hit.face);
+        let q = (reflected.max_element() / power.max_element()).min(1.0);
+        if !(q > 0.0) || sampling::uniform(&mut rng) >= q {
+            break;
+        }
+        power = reflected / q;
+        (face, x, n) = (hit.face, hit.point, nh);
     }
 }
