@@ -16,7 +16,7 @@ pub(crate) fn channel_mean(c: Rgb) -> f64 {
 
 /// A light sample.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LightSample {
+pub struct LightSample {
     /// The emitting face.
     pub face: FaceId,
     /// A point on it.
@@ -27,7 +27,7 @@ pub(crate) struct LightSample {
 
 /// The scene's emitters, ready for sampling.
 #[derive(Clone, Debug)]
-pub(crate) struct EmitterSampler {
+pub struct EmitterSampler {
     faces: Vec<FaceId>,
     /// Per emitter, its polygon's area sampler (built once, not per sample).
     samplers: Vec<AreaSampler>,
@@ -38,7 +38,7 @@ pub(crate) struct EmitterSampler {
 
 impl EmitterSampler {
     /// Collects the emitting faces of `scene`.
-    pub(crate) fn new(scene: &Scene) -> Self {
+    pub fn new(scene: &Scene) -> Self {
         let faces = scene.emitters();
         let choose = Discrete::new(
             faces
@@ -70,12 +70,12 @@ impl EmitterSampler {
     }
 
     /// Whether there is nothing to sample (no emitter with positive power).
-    pub(crate) fn is_empty(&self) -> bool {
+    pub fn is_empty(&self) -> bool {
         self.choose.is_empty()
     }
 
     /// A point on an emitter from three numbers in [0, 1).
-    pub(crate) fn sample(&self, u0: f64, u1: f64, u2: f64) -> Option<LightSample> {
+    pub fn sample(&self, u0: f64, u1: f64, u2: f64) -> Option<LightSample> {
         if self.is_empty() {
             return None;
         }
@@ -89,7 +89,7 @@ impl EmitterSampler {
     }
 
     /// Area density with which [`EmitterSampler::sample`] produces points on `face` (0 for non-emitters).
-    pub(crate) fn pdf_area(&self, face: FaceId) -> f64 {
+    pub fn pdf_area(&self, face: FaceId) -> f64 {
         match self.density.binary_search_by_key(&face, |&(f, _)| f) {
             Ok(k) => self.density[k].1,
             Err(_) => 0.0,

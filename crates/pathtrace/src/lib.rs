@@ -86,8 +86,9 @@ mod running_stats;
 mod stochastic_jacobi;
 
 pub use camera_render::{RenderParams, render};
+pub use emitter_sampling::{EmitterSampler, LightSample};
 pub use mesh_radiosity::{McMethod, McRadiosityParams, McRadiositySolver};
-pub use path_estimator::DirectSampling;
+pub use path_estimator::{DirectSampling, PathEstimator};
 pub use point_estimator::{
     DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
     estimate_points, estimate_points_with_progress,

@@ -58,8 +58,11 @@ fn power_heuristic(a: f64, b: f64) -> f64 {
     if w.is_finite() { w } else { 0.0 }
 }
 
-/// The shared path estimator for one scene.
-pub(crate) struct PathEstimator<'a> {
+/// The shared path estimator for one scene: samples of the radiosity leaving a surface point (the walk
+/// described in the module documentation), of its reflected part, and of the direct irradiance by next-event
+/// estimation alone. Other Monte Carlo crates (irradiance caching, photon maps) reuse it for the parts of their
+/// estimates that are plain path tracing.
+pub struct PathEstimator<'a> {
     scene: &'a Scene,
     accel: &'a Accel,
     emitters: EmitterSampler,
@@ -68,12 +71,9 @@ pub(crate) struct PathEstimator<'a> {
 }
 
 impl<'a> PathEstimator<'a> {
-    pub(crate) fn new(
-        scene: &'a Scene,
-        accel: &'a Accel,
-        max_depth: u32,
-        direct: DirectSampling,
-    ) -> Self {
+    /// The estimator for `scene` through `accel`: paths of at most `max_depth` segments, direct light at each
+    /// vertex sampled as `direct` says.
+    pub fn new(scene: &'a Scene, accel: &'a Accel, max_depth: u32, direct: DirectSampling) -> Self {
         Self {
             scene,
             accel,
@@ -85,9 +85,65 @@ impl<'a> PathEstimator<'a> {
 
     /// One unbiased sample of the radiosity leaving point `x` of face `face`, gathering over the hemisphere of
     /// unit normal `n`.
-    pub(crate) fn radiosity(&self, face: FaceId, x: DVec3, n: DVec3, rng: &mut Rng) -> Rgb {
+    pub fn radiosity(&self, face: FaceId, x: DVec3, n: DVec3, rng: &mut Rng) -> Rgb {
+        self.walk(self.scene.emission(face), face, x, n, rng)
+    }
+
+    /// One unbiased sample of the radiosity that point `x` of face `face` reflects, ρ(x) H(x): the radiosity
+    /// without the point's own emission E(x).
+    pub fn reflected_radiosity(&self, face: FaceId, x: DVec3, n: DVec3, rng: &mut Rng) -> Rgb {
+        self.walk(Rgb::ZERO, face, x, n, rng)
+    }
+
+    /// One unbiased sample of the irradiance arriving at point `x` of face `face` (unit normal `n`) directly
+    /// from the emitters, by the estimator's `direct` strategy: next-event estimation (one shadow ray,
+    /// E(y)/π cos θ_x cos θ_y / r² V(x, y) / p_A(y)) and/or one cosine-distributed ray whose emitter adds E(y),
+    /// combined by the power heuristic under `mis`. Zero when the scene has no emitter.
+    pub fn direct_irradiance(&self, face: FaceId, x: DVec3, n: DVec3, rng: &mut Rng) -> Rgb {
+        let mut h = Rgb::ZERO;
+        if self.direct != DirectSampling::Hemisphere {
+            h += self.next_event(face, x, n, rng);
+        }
+        if self.direct != DirectSampling::NextEvent {
+            let dir =
+                sampling::cosine_hemisphere(n, sampling::uniform(rng), sampling::uniform(rng));
+            if let Some((e, w)) = self
+                .accel
+                .intersect_from(face, x, dir)
+                .and_then(|hit| self.emission_seen(n, dir, &hit))
+            {
+                h += e * w;
+            }
+        }
+        h
+    }
+
+    /// The emission a cosine-sampled ray along `dir` from a point of normal `n` meets at `hit`, and its MIS
+    /// weight against next-event estimation (1 unless `mis`); `None` at a back or a non-emitter.
+    fn emission_seen(
+        &self,
+        n: DVec3,
+        dir: DVec3,
+        hit: &radlab_visibility::Hit,
+    ) -> Option<(Rgb, f64)> {
+        let cos_y = -self.scene.faces[hit.face].normal.dot(dir);
+        let e = self.scene.emission(hit.face);
+        if !(cos_y > 0.0) || e.max_element() <= 0.0 {
+            return None;
+        }
+        let w = if self.direct == DirectSampling::Mis {
+            let p_hemi = n.dot(dir).max(0.0) * INV_PI;
+            let p_light = self.emitters.pdf_area(hit.face) * hit.t * hit.t / cos_y;
+            power_heuristic(p_hemi, p_light)
+        } else {
+            1.0
+        };
+        Some((e, w))
+    }
+
+    /// The walk from (`face`, `x`, `n`) adding to `b`.
+    fn walk(&self, mut b: Rgb, face: FaceId, x: DVec3, n: DVec3, rng: &mut Rng) -> Rgb {
         let scene = self.scene;
-        let mut b = scene.emission(face);
         let mut throughput = Rgb::ONE;
         let (mut f, mut x, mut n) = (face, x, n);
         for _ in 0..self.max_depth {
@@ -115,15 +171,9 @@ impl<'a> PathEstimator<'a> {
             if cos_y.is_nan() || cos_y <= 0.0 {
                 break; // the back of a face: absorbed
             }
-            let e = scene.emission(hit.face);
-            if self.direct != DirectSampling::NextEvent && e.max_element() > 0.0 {
-                let w = if self.direct == DirectSampling::Mis {
-                    let p_hemi = n.dot(dir).max(0.0) * INV_PI;
-                    let p_light = self.emitters.pdf_area(hit.face) * hit.t * hit.t / cos_y;
-                    power_heuristic(p_hemi, p_light)
-                } else {
-                    1.0
-                };
+            if self.direct != DirectSampling::NextEvent
+                && let Some((e, w)) = self.emission_seen(n, dir, &hit)
+            {
                 b += throughput * e * w;
             }
             (f, x, n) = (hit.face, hit.point, normal);

@@ -27,7 +27,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use radlab_scene::{EvalPoint, Scene, evaluation_points};
+use radlab_method::{EvalPoint, evaluation_points};
+use radlab_scene::Scene;
 
 use crate::output::atomic;
 use crate::scene_spec;
