@@ -120,7 +120,7 @@ fn documented_defaults_match_the_defaults_in_use() {
     let mut wrong = Vec::new();
     for m in radlab_runner::methods::methods() {
         for p in (m.params)() {
-            let Some(stated) = stated_default(&p.doc) else {
+            let Some(stated) = stated_default(&p.help) else {
                 continue;
             };
             let actual = p.default.trim_matches('"');
