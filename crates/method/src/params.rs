@@ -163,7 +163,7 @@ pub trait MethodParams:
                     Some(SolveError::param(
                         k,
                         format!(
-                            "{}; {k} takes a {} (default {})",
+                            "{}; accepted: {} (default {})",
                             e.message().trim_end(),
                             d.accepts(),
                             d.default
