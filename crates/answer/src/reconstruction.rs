@@ -20,7 +20,9 @@ use radlab_scene::{FaceId, Rgb, Scene};
 use radlab_visibility::Accel;
 
 /// How point answers are reconstructed from element values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Reconstruction {
     /// The element's constant value.

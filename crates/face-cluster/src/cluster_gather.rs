@@ -81,7 +81,9 @@ pub const DEFAULT_OPENING: f64 = 0.25;
 pub const DEFAULT_VALUES_OPENING: f64 = 0.5;
 
 /// Where the final gather's face values come from (parameter `gather_values`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum GatherValues {
     /// The solution's constant answers, once per solution (one bounce). The default.
@@ -104,7 +106,9 @@ impl GatherValues {
 
 /// How the flat final gather (`gather_opening = 0`) treats faces near the query point (parameter
 /// `near_field`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum NearField {
     /// Every face by its exact point-to-polygon factor and its one value (this module's gather). The default.

@@ -30,7 +30,9 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// How a link's irradiance spreads over a cluster receiver.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum IrradianceField {
     /// One irradiance for the whole receiver, taken at its centroid (Willmott, Heckbert & Garland 1999).

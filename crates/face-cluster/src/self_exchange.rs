@@ -37,7 +37,9 @@ use serde::{Deserialize, Serialize};
 use crate::FaceClusterTree;
 
 /// What a curved face-cluster node sends onto itself (parameter `self_exchange`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum SelfExchangeMode {
     /// Only a concave node (each child's centroid in front of the other's mean plane) has a self-link, with

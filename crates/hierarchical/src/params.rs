@@ -7,13 +7,14 @@
 use radlab_answer::Reconstruction;
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// The default minimum element size as a fraction of the scene's bounding-box diagonal.
 pub const MIN_ELEMENT_SIZE_REL: f64 = 1.0 / 150.0;
 
 /// How a link's error is estimated (Hanrahan, Salzman & Aupperle 1991; Stamminger et al. 1997).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Oracle {
     /// Form factor: max(F_rs, F_sr), the larger of the link's two form factors. Geometry only, so the
@@ -31,7 +32,7 @@ pub enum Oracle {
 }
 
 /// How link refinement and solution alternate (Willmott 2000, §2.4.3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Schedule {
     /// Refine every link until the oracle is met (with the lighting known before solving: emission only),
@@ -47,7 +48,7 @@ pub enum Schedule {
 }
 
 /// How a leaf's irradiance is gathered from the links on its path to the root (Hanrahan, Salzman & Aupperle 1991: gather, then push-pull).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Gather {
     /// The kernel is integrated at each leaf for every link above it: H_leaf = Σ V_as F_{leaf→s} B_s over
@@ -64,7 +65,7 @@ pub enum Gather {
 
 /// What the refinement threshold ε bounds (RenderPark's "error norm"; Smits, Arvo & Greenberg 1994 bound the
 /// power a link carries).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum ErrorNorm {
     /// The oracle's estimate as is: the irradiance a link brings its receiver, relative to the scene's mean
@@ -77,61 +78,71 @@ pub enum ErrorNorm {
     Power,
 }
 
-/// Parameters of [`crate::HierarchicalSolver`]. Every field has a default; see [`MethodParams::docs`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of [`crate::HierarchicalSolver`] and of the methods on its engine (which flatten them into
+/// their own), each declared once: its doc comment's first paragraph is the help `radlab methods` prints, its
+/// `schemars` attribute the accepted range, and its default is in [`HierarchicalParams::default_params`] (a
+/// method on the engine may change it in its own `Default`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct HierarchicalParams {
-    /// Refinement threshold ε on the oracle's estimate (dimensionless). Default 0.01.
+    /// Refinement threshold ε: a link whose error estimate (the oracle's, scaled as error_norm says) exceeds
+    /// it is refined; dimensionless.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: f64,
-    /// Refinement oracle. Default [`Oracle::Variation`].
+    /// How a link's error is estimated: f (form factor), bf (radiosity × form factor) or variation (spread of
+    /// the kernel over the receiver's quadrature points; needs quadrature ≥ 2).
     pub oracle: Oracle,
-    /// What ε bounds. Default [`ErrorNorm::Radiosity`].
+    /// What ε bounds: radiosity (the irradiance a link brings its receiver, relative to the scene's mean) or
+    /// power (that times the receiver's share of the scene's area).
     pub error_norm: ErrorNorm,
-    /// Schedule. Default [`Schedule::Scheduled`].
+    /// How refinement and solution alternate: two-stage, interleaved or scheduled.
     pub schedule: Schedule,
-    /// Scheduled only: ε is divided by α between stages (α ≥ 1; 1 simulates successive bounces). Default 2.
+    /// Scheduled only: ε is divided by alpha between stages (1 simulates successive bounces).
+    #[schemars(range(min = 1))]
     pub alpha: f64,
-    /// Scheduled only: number of stages over which ε falls to its final value. Default 3.
+    /// Scheduled only: number of stages over which ε falls to its final value.
+    #[schemars(range(min = 1, max = 64))]
     pub stages: u32,
     /// Interleaved and scheduled only: create the initial links from an input face only once it carries
-    /// light (Holzschuch, Sillion & Drettakis 1994). Default true.
+    /// light (Holzschuch, Sillion & Drettakis 1994).
     pub lazy_linking: bool,
-    /// Smallest element edge: an element is split only if its children's longest edge stays at least this
-    /// long (scene units). Absent: the scene's bounding-box diagonal × [`MIN_ELEMENT_SIZE_REL`].
+    /// Smallest element edge in scene units: an element is split only if its children's longest edge stays
+    /// at least this long; unset: the scene's bounding-box diagonal / 150 ([`MIN_ELEMENT_SIZE_REL`]).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub min_element_size: Option<f64>,
-    /// Rays per link for its visibility fraction. Default 4×4 jittered (16 rays).
+    /// Visibility rays per link.
     pub visibility: VisibilitySampling,
     /// Gauss–Legendre points per side (m, m² points) of the receiver quadrature of the point-to-polygon
-    /// kernel. Default 2.
+    /// kernel.
+    #[schemars(range(min = 1, max = 8))]
     pub quadrature: u32,
-    /// The solution is converged when its estimated remaining relative error (area-weighted L1) is below
-    /// this. Default 1e-4.
+    /// Estimated remaining relative error (area-weighted L1) below which the solution is converged.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub tolerance: f64,
-    /// Stop (reporting converged, with the residual in the stats) after this many steps. Default 100000.
+    /// Steps after which the solver stops (reporting converged, with the residual in the stats).
+    #[schemars(range(min = 1))]
     pub max_steps: u64,
-    /// How leaves gather from the links above them. Default [`Gather::Leaf`].
+    /// How leaves gather from the links above them: leaf (the kernel at each leaf for every link above it) or
+    /// link (classic: each link's receiver mean, pushed down).
     pub gather: Gather,
-    /// Point answers: `constant` per leaf, `gouraud` (vertex-interpolated over each face's quadtree, T-vertices
-    /// resolved) or `final-gather` (one more gather from every leaf with exact point-to-polygon factors and
-    /// rays). Default [`DEFAULT_RECONSTRUCTION`].
+    /// How radiosity at a point is answered: constant (per leaf), gouraud (vertex-interpolated) or
+    /// final-gather (one more gather from every leaf with exact point-to-polygon factors and rays, charged to
+    /// answering).
+    ///
+    /// Gouraud interpolates over each face's quadtree with T-vertices resolved. A final gather costs a kernel
+    /// per leaf and query, so images of finely refined solutions are slow; ask for constant to read the leaves
+    /// themselves.
     pub reconstruction: Reconstruction,
-    /// Refuse to hold more links and elements than this many MiB. Default 4096.
+    /// Memory the elements and links may take, MiB; a refinement beyond it is refused.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
 }
 
-/// Default reconstruction of point answers, chosen by measurement: `final-gather`. At the default ε = 0.01 on
-/// the Cornell box (512 points against the path-traced reference) it gave relative L1 3.1% against 7.0%
-/// (constant) and 6.8% (gouraud), and a worst point of 27% against 2798% and 1796% (floored max); volume
-/// clusters at their default ε = 1e-4: 2.5% against 8.0% and 7.9%. On the room of scenes/room.toml (solve
-/// stopped by a 120 s limit, about 9,500 leaves): 4.3% against 8.8% and 9.1%, worst point 2254% against 4122%
-/// and 3963% (points in millimetre gaps under objects, which no reconstruction of these elements reaches). The
-/// price is answering time: one point-to-polygon kernel per leaf and query plus rays (3.8 s for 512 points
-/// over 6,245 leaves, 11 s over 9,449 in the room, on a loaded 2-core machine), so images of finely refined
-/// solutions are slow; ask for `constant` to read the leaves themselves. Since links from inner sources send
-/// their leaves' radiosity weighted by how much each sees the receiver (the quickstart, idle machine): 1.2%
-/// against 4.3% constant at ε = 0.01, volume clusters 1.4% at ε = 1e-4; in the quickstart of 2026-12-02,
-/// after later changes, 1.0% against 3.7%, worst point 39% against 2929%.
+/// Default reconstruction of point answers: `final-gather`, chosen by measurement against the path-traced
+/// reference (docs/methods.md gives the figures): at the default ε on the Cornell box it is several times
+/// closer than `constant` or `gouraud`, at the price of answering time (a point-to-polygon kernel per leaf and
+/// query, plus rays), so images of finely refined solutions are slow.
 pub const DEFAULT_RECONSTRUCTION: Reconstruction = Reconstruction::FinalGather;
 
 impl HierarchicalParams {
@@ -203,126 +214,12 @@ impl Default for HierarchicalParams {
 }
 
 impl MethodParams for HierarchicalParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "epsilon",
-                "refinement threshold on the oracle's estimate, dimensionless",
-            ),
-            (
-                "oracle",
-                "f (form factor) | bf (radiosity x form factor) | variation (spread of kernel samples, default)",
-            ),
-            (
-                "error_norm",
-                "radiosity (irradiance a link brings, relative to the mean; hierarchical's default) | power (times \
-                 receiver area over scene area; volume-cluster's default)",
-            ),
-            (
-                "schedule",
-                "two-stage | interleaved | scheduled (default): how refinement and solution alternate",
-            ),
-            (
-                "alpha",
-                "scheduled: epsilon divided by alpha between stages, >= 1 (default 2)",
-            ),
-            (
-                "stages",
-                "scheduled: stages over which epsilon falls to its final value, >= 1 (default 3)",
-            ),
-            (
-                "lazy_linking",
-                "interleaved/scheduled: link from a face only once it carries light (default true)",
-            ),
-            (
-                "min_element_size",
-                "smallest element edge in scene units (default: scene diagonal / 150)",
-            ),
-            (
-                "visibility",
-                "rays per link: unoccluded | centre | jittered2x2 | jittered4x4 (default) | jittered8x8",
-            ),
-            (
-                "quadrature",
-                "Gauss points per side of the receiver quadrature, 1..=8 (default 2)",
-            ),
-            (
-                "tolerance",
-                "estimated relative error at which the solution stops (default 1e-4)",
-            ),
-            (
-                "max_steps",
-                "steps after which the solver stops (default 100000)",
-            ),
-            (
-                "gather",
-                "leaf (default: kernel at each leaf for every link above it) | link (classic: per-link mean, pushed)",
-            ),
-            (
-                "reconstruction",
-                "point answers: constant | gouraud (vertex-interpolated) | final-gather (one more gather from every \
-                 leaf, exact point-to-polygon factors and rays; its cost is charged when answering); \
-                 hierarchical's and volume-cluster's default is final-gather, chosen by measurement (Cornell box, 512 \
-                 points, default epsilon, the quickstart of 2026-12-02: relative L1 1.0% against 3.7% constant for \
-                 hierarchical, 1.4% for volume clusters; worst point 39% against 2929% constant); answering costs a kernel per \
-                 leaf and query, so images of fine solutions are slow",
-            ),
-            (
-                "memory_budget_mib",
-                "refuse to hold more elements and links than this (default 4096)",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        let positive = |name: &str, x: f64| {
-            if x.is_finite() && x > 0.0 {
-                Ok(())
-            } else {
-                Err(SolveError::param(
-                    name,
-                    format!("{x} must be a finite number > 0"),
-                ))
-            }
-        };
-        positive("epsilon", self.epsilon)?;
-        positive("tolerance", self.tolerance)?;
-        positive("memory_budget_mib", self.memory_budget_mib)?;
-        if !(self.alpha.is_finite() && self.alpha >= 1.0) {
-            return Err(SolveError::param(
-                "alpha",
-                format!(
-                    "{} must be a finite number >= 1 (epsilon is divided by alpha between stages)",
-                    self.alpha
-                ),
-            ));
-        }
-        if self.stages == 0 || self.stages > 64 {
-            return Err(SolveError::param(
-                "stages",
-                format!("{} must be within 1..=64", self.stages),
-            ));
-        }
-        if let Some(s) = self.min_element_size {
-            positive("min_element_size", s)?;
-        }
-        if !(1..=8).contains(&self.quadrature) {
-            return Err(SolveError::param(
-                "quadrature",
-                format!(
-                    "{} must be within 1..=8 (Gauss points per side)",
-                    self.quadrature
-                ),
-            ));
-        }
+    fn check_combination(&self) -> Result<(), SolveError> {
         if self.oracle == Oracle::Variation && self.quadrature < 2 {
             return Err(SolveError::param(
                 "quadrature",
                 "the variation oracle needs at least 2 Gauss points per side (with 1 it samples the centroid only)",
             ));
-        }
-        if self.max_steps == 0 {
-            return Err(SolveError::param("max_steps", "must be at least 1"));
         }
         if !(self.epsilon * self.alpha.powi(self.stages as i32 - 1)).is_finite() {
             return Err(SolveError::param(

@@ -4,11 +4,12 @@
 
 use radlab_answer::Reconstruction;
 use radlab_kernels::form_factor::VisibilitySampling;
-use radlab_method::{MethodParams, SolveError};
+use radlab_method::MethodParams;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// How the linear system (I − ρF) B = E is solved.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Iteration {
     /// Jacobi: every element gathers from the previous iterate (rows in parallel). Error shrinks by about the
@@ -35,33 +36,41 @@ pub const DEFAULT_MEMORY_BUDGET_MIB: f64 = 2048.0;
 /// Largest accepted quadrature order per axis.
 pub const MAX_QUADRATURE: u32 = 16;
 
-/// Parameters of [`crate::MatrixSolver`]. Every field has a default; see the crate documentation for the
-/// full table.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of [`crate::MatrixSolver`], each declared once: its doc comment's first paragraph is the help
+/// `radlab methods` prints, its `schemars` attribute the accepted range, and its default is in `impl Default`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct MatrixParams {
-    /// Longest element edge in scene units. `None` (the default): `radlab_answer::default_element_size`,
-    /// 1/20 of the scene's bounding-box diagonal (about 1,000 elements in the Cornell box).
+    /// Longest element edge in scene units; unset: 1/20 of the scene's bounding-box diagonal
+    /// (`radlab_answer::default_element_size`, about 1,000 elements in the Cornell box).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,
-    /// The iterative solver. Default: Gauss–Seidel.
+    /// The iterative solver of (I − ρF) B = E: jacobi, gauss-seidel or conjugate-gradient.
     pub iteration: Iteration,
-    /// Target relative error of B in the area-weighted L1 norm. Iteration stops when the relative residual
-    /// falls below `tolerance × (1 − ρ_max)` per channel, which bounds the error by `tolerance`
-    /// (‖(I − ρF)⁻¹‖ ≤ 1/(1 − ρ_max) for a reciprocal F with row sums ≤ 1). Default 1e-4.
+    /// Target relative error of B in the area-weighted L1 norm.
+    ///
+    /// Iteration stops when the relative residual falls below `tolerance × (1 − ρ_max)` per channel, which
+    /// bounds the error by `tolerance` (‖(I − ρF)⁻¹‖ ≤ 1/(1 − ρ_max) for a reciprocal F with row sums ≤ 1).
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 1))]
     pub tolerance: f64,
     /// Cap on iterations; reaching it stops the solver (reported by `MatrixSolver::hit_iteration_cap`).
-    /// Default 100,000.
+    #[schemars(range(min = 1))]
     pub max_iterations: usize,
-    /// Visibility estimate per element pair. Default: 4 × 4 jittered rays.
+    /// Visibility rays per element pair; the jittered grids also give each element its open share (128 rays:
+    /// the part not sealed under a touching panel).
     pub visibility: VisibilitySampling,
     /// Receiver quadrature points per axis for the point-to-polygon kernel (m × m points per element).
-    /// Default 2.
+    #[schemars(range(min = 1, max = MAX_QUADRATURE))]
     pub quadrature: u32,
-    /// Memory the matrix and solver vectors may take, MiB; larger problems are refused before allocating.
-    /// Default 2048.
+    /// Memory the n × n matrix and the solver's vectors may take, MiB; larger problems are refused before
+    /// allocating.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
-    /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
-    /// `final-gather` (see [`radlab_answer::reconstruction`]). Default [`DEFAULT_RECONSTRUCTION`].
+    /// How radiosity at a point is answered from the element values: constant, gouraud (vertex-interpolated)
+    /// or final-gather (one more gather with exact point-to-polygon factors and rays, charged to answering).
+    ///
+    /// See [`radlab_answer::reconstruction`]; a final gather costs rays per query, so images of large meshes
+    /// are slow.
     pub reconstruction: Reconstruction,
 }
 
@@ -83,86 +92,7 @@ impl Default for MatrixParams {
     }
 }
 
-impl MethodParams for MatrixParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "element_size",
-                "longest element edge (scene units); default 1/20 of the scene's bounding-box diagonal",
-            ),
-            (
-                "iteration",
-                "jacobi | gauss-seidel | conjugate-gradient; default gauss-seidel",
-            ),
-            (
-                "tolerance",
-                "target relative error of B (area-weighted L1); stops at relative residual < tolerance × (1 − ρ_max); default 1e-4",
-            ),
-            ("max_iterations", "cap on iterations; default 100000"),
-            (
-                "visibility",
-                "unoccluded | centre | jittered2x2 | jittered4x4 | jittered8x8 rays per element pair; default jittered4x4; \
-                 the jittered settings also give each element its open share (128 rays: the part not sealed under \
-                 a touching panel)",
-            ),
-            (
-                "quadrature",
-                "receiver points per axis for the point-to-polygon kernel (1..=16); default 2",
-            ),
-            (
-                "memory_budget_mib",
-                "MiB the n×n matrix and vectors may take; larger problems are refused; default 2048",
-            ),
-            (
-                "reconstruction",
-                "point answers from the element values: constant | gouraud (vertex-interpolated) | \
-                 final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
-                 answering cost); default final-gather (Cornell box, 512 points: relative L1 1.8% against 11.0% constant and \
-                 11.1% gouraud at 110 mm elements, 0.9% / 6.2% / 4.6% at 55 mm; a gather costs rays per query, so \
-                 images of large meshes are slow)",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        if let Some(s) = self.element_size
-            && !(s.is_finite() && s > 0.0)
-        {
-            return Err(SolveError::param(
-                "element_size",
-                format!("{s} is not a finite length > 0 (scene units)"),
-            ));
-        }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
-            return Err(SolveError::param(
-                "tolerance",
-                format!(
-                    "{} is outside (0, 1); it is a relative error, e.g. 1e-4",
-                    self.tolerance
-                ),
-            ));
-        }
-        if self.max_iterations == 0 {
-            return Err(SolveError::param("max_iterations", "must be at least 1"));
-        }
-        if !(1..=MAX_QUADRATURE).contains(&self.quadrature) {
-            return Err(SolveError::param(
-                "quadrature",
-                format!(
-                    "{} is outside 1..={MAX_QUADRATURE} (points per axis on each receiver element)",
-                    self.quadrature
-                ),
-            ));
-        }
-        if !(self.memory_budget_mib.is_finite() && self.memory_budget_mib > 0.0) {
-            return Err(SolveError::param(
-                "memory_budget_mib",
-                format!("{} is not a finite size > 0 (MiB)", self.memory_budget_mib),
-            ));
-        }
-        Ok(())
-    }
-}
+impl MethodParams for MatrixParams {}
 
 #[cfg(test)]
 mod tests {
@@ -223,11 +153,11 @@ mod tests {
 
     #[test]
     fn defaults_are_listed() {
-        let d = MatrixParams::default_values();
+        let d = MatrixParams::declarations();
         for name in ["iteration", "tolerance", "quadrature", "visibility"] {
-            assert!(d.iter().any(|(k, _)| k == name), "{name} missing: {d:?}");
+            assert!(d.iter().any(|p| p.name == name), "{name} missing: {d:?}");
         }
-        let docs = MatrixParams::docs();
-        assert_eq!(docs.len(), 8);
+        let decls = MatrixParams::declarations();
+        assert_eq!(decls.len(), 8);
     }
 }

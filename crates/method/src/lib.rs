@@ -14,5 +14,5 @@ pub mod solver;
 
 pub use error::SolveError;
 pub use eval_points::{EvalPoint, evaluation_points};
-pub use params::MethodParams;
+pub use params::{MethodParams, ParamDecl};
 pub use solver::{PerFaceSolution, Solution, Solver, Stats, Step};

@@ -9,25 +9,31 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use radlab_answer::Image;
-use radlab_method::{MethodParams, SolveError};
+use radlab_method::MethodParams;
 use radlab_scene::{Camera, Rgb, Scene, sampling};
 use radlab_visibility::Accel;
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};
 use crate::point_estimator::DEFAULT_MAX_DEPTH;
 use crate::running_stats::RunningStats;
 
-/// Parameters of camera path tracing.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of camera path tracing, each declared once on its field (doc comment: help; `schemars`
+/// attribute: range; default: `impl Default`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct RenderParams {
-    /// Paths per pixel (default 64). 1 gives a preview with an infinite standard error.
+    /// Paths per pixel for render; the standard error falls as 1/√samples_per_pixel (1 gives a preview with an
+    /// infinite standard error).
+    #[schemars(range(min = 1))]
     pub samples_per_pixel: u32,
-    /// Largest number of path segments after the first hit (default 100,000; see `PointParams::max_depth`).
+    /// Cap on path segments after the first hit (see `PointParams::max_depth`).
+    #[schemars(range(min = 1))]
     pub max_depth: u32,
-    /// How direct light is sampled at each path vertex (default `mis`).
+    /// How direct light is sampled at each path vertex: mis (next-event and hemisphere sampling, power
+    /// heuristic), next-event or hemisphere.
     pub direct: DirectSampling,
 }
 
@@ -41,34 +47,7 @@ impl Default for RenderParams {
     }
 }
 
-impl MethodParams for RenderParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "samples_per_pixel",
-                "paths per pixel for render (default 64); standard error falls as 1/sqrt(samples_per_pixel)",
-            ),
-            (
-                "max_depth",
-                "cap on path segments after the first hit (default 100000)",
-            ),
-            (
-                "direct",
-                "direct-light sampling: mis (default), next-event, hemisphere",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        if self.samples_per_pixel == 0 {
-            return Err(SolveError::param("samples_per_pixel", "must be at least 1"));
-        }
-        if self.max_depth == 0 {
-            return Err(SolveError::param("max_depth", "must be at least 1"));
-        }
-        Ok(())
-    }
-}
+impl MethodParams for RenderParams {}
 
 /// Path-traces `camera`'s pixels: (mean radiance, standard error of the mean), both in W/m²/sr, linear RGB.
 /// `progress(pixels_done, pixels_total)` is called from worker threads after each row.

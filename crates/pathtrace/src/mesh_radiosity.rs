@@ -49,6 +49,7 @@ use radlab_scene::{
     sampling::{self, Rng},
 };
 use radlab_visibility::Accel;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::discrete_distribution::Discrete;
@@ -57,7 +58,9 @@ use crate::point_estimator::DEFAULT_MAX_DEPTH;
 use crate::{random_walk, stochastic_jacobi};
 
 /// Which Monte Carlo estimator of the element radiosities to run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum McMethod {
     /// Discrete shooting random walks with the collision estimator (Shirley 1991; Sbert 1993; Bekaert 1999
@@ -73,26 +76,32 @@ pub enum McMethod {
     StochasticJacobi,
 }
 
-/// Parameters of mesh-based Monte Carlo radiosity.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of mesh-based Monte Carlo radiosity, each declared once on its field (doc comment: help;
+/// `schemars` attribute: range; default: `impl Default`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct McRadiosityParams {
-    /// Element edge length in scene units (default: 1/20 of the scene's bounding diagonal, as for matrix).
+    /// Element edge length in scene units; unset: 1/20 of the scene's bounding diagonal, as for matrix.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,
-    /// Particles shot from the emitters per step (default 100,000).
+    /// Particles shot from the emitters per step.
+    #[schemars(range(min = 1))]
     pub particles_per_step: u64,
-    /// Steps before the solver reports convergence (default 100).
+    /// Steps before convergence is reported; the result is the mean over all steps.
+    #[schemars(range(min = 1))]
     pub max_steps: u64,
-    /// The estimator (default `random-walk`).
+    /// The estimator: random-walk (collision-shooting random walks) or stochastic-jacobi.
     pub method: McMethod,
-    /// Cap on bounces per particle (random walk) or generations per step (stochastic Jacobi); default 100,000.
-    /// Russian roulette ends walks without bias; the cap only guards against runaway walks.
+    /// Cap on bounces per particle (random walk) or generations per step (stochastic Jacobi); Russian roulette
+    /// ends walks without bias, the cap only guards against runaway walks.
+    #[schemars(range(min = 1))]
     pub max_depth: u32,
-    /// How radiosity at a point is answered from the element values (default `final-gather`, chosen by
-    /// measurement: it averages out the elements' noise and sees which points are sealed, for a gather per
-    /// query; at 512 points on the Cornell box it costs 7% more rays than the solve and is 5× as accurate as
-    /// `gouraud`).
+    /// How radiosity at a point is answered from the element values: constant, gouraud or final-gather (one
+    /// more gather, which averages out the elements' noise and sees which points are sealed, charged to
+    /// answering).
+    ///
+    /// The default final gather was chosen by measurement (docs/methods.md gives the figures).
     pub reconstruction: Reconstruction,
 }
 
@@ -109,63 +118,7 @@ impl Default for McRadiosityParams {
     }
 }
 
-impl MethodParams for McRadiosityParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "element_size",
-                "element edge length (default 1/20 of the scene's diagonal, as for matrix)",
-            ),
-            (
-                "particles_per_step",
-                "particles shot from the emitters per step (default 100000)",
-            ),
-            (
-                "max_steps",
-                "steps before convergence is reported (default 100); the result is the mean over all steps",
-            ),
-            (
-                "method",
-                "random-walk (collision-shooting random walks; default) or stochastic-jacobi",
-            ),
-            (
-                "max_depth",
-                "cap on bounces per particle or generations per step (default 100000)",
-            ),
-            (
-                "reconstruction",
-                "point answers from the element values: constant | gouraud | final-gather; default final-gather (512 \
-                 points, relative L1: Cornell box at 55 mm elements 0.93% against 4.75% gouraud and 6.4% constant, for 7% \
-                 more rays; furnished room 0.48% against 5.5% gouraud, whose sealed points under the floor covering take \
-                 their elements' open value; empty room 0.25% against 1.6%)",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        if let Some(s) = self.element_size
-            && !(s.is_finite() && s > 0.0)
-        {
-            return Err(SolveError::param(
-                "element_size",
-                format!("{s} must be a finite length > 0 (scene units)"),
-            ));
-        }
-        if self.particles_per_step == 0 {
-            return Err(SolveError::param(
-                "particles_per_step",
-                "must be at least 1",
-            ));
-        }
-        if self.max_steps == 0 {
-            return Err(SolveError::param("max_steps", "must be at least 1"));
-        }
-        if self.max_depth == 0 {
-            return Err(SolveError::param("max_depth", "must be at least 1"));
-        }
-        Ok(())
-    }
-}
+impl MethodParams for McRadiosityParams {}
 
 /// What the particle estimators share: the mesh, where particles start, and how they fly.
 pub(crate) struct Transport<'a> {

@@ -34,7 +34,9 @@ use crate::emitter_sampling::EmitterSampler;
 const INV_PI: f64 = std::f64::consts::FRAC_1_PI;
 
 /// How the light arriving directly from emitters is estimated at each path vertex.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum DirectSampling {
     /// Next-event estimation and hemisphere sampling combined by the power heuristic (Veach 1997): robust

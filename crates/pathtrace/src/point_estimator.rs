@@ -10,10 +10,11 @@
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 use glam::DVec3;
-use radlab_method::{MethodParams, SolveError};
+use radlab_method::MethodParams;
 use radlab_scene::{FaceId, Rgb, Scene, sampling};
 use radlab_visibility::Accel;
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};
@@ -25,16 +26,22 @@ pub const SAMPLES_PER_CHUNK: u32 = 256;
 /// Default number of path segments after which a path is cut (see [`PointParams::max_depth`]).
 pub const DEFAULT_MAX_DEPTH: u32 = 100_000;
 
-/// Parameters of the per-point estimator.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of the per-point estimator, each declared once on its field (doc comment: help; `schemars`
+/// attribute: range; default: `impl Default`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct PointParams {
-    /// Paths per point (default 1024). The standard error falls as 1/√samples.
+    /// Paths per point; the standard error falls as 1/√samples (2 or more give a standard error).
+    #[schemars(range(min = 1))]
     pub samples: u32,
-    /// Largest number of path segments (default 100,000): a safety cap. Russian roulette ends paths without
-    /// bias; the cap could only bias by ρ_max^max_depth (relative), e.g. 4.5e-44 at ρ = 0.999.
+    /// Cap on path segments (1: direct light only); Russian roulette ends paths without bias, the cap only
+    /// guards against runaway paths.
+    ///
+    /// The cap could only bias by ρ_max^max_depth (relative), e.g. 4.5e-44 at ρ = 0.999.
+    #[schemars(range(min = 1))]
     pub max_depth: u32,
-    /// How direct light is sampled at each path vertex (default `mis`).
+    /// How direct light is sampled at each path vertex: mis (next-event and hemisphere sampling, power
+    /// heuristic), next-event or hemisphere.
     pub direct: DirectSampling,
 }
 
@@ -48,42 +55,7 @@ impl Default for PointParams {
     }
 }
 
-impl MethodParams for PointParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "samples",
-                "paths per point (default 1024); standard error falls as 1/sqrt(samples)",
-            ),
-            (
-                "max_depth",
-                "cap on path segments (default 100000); Russian roulette ends paths without bias, the cap \
-                 only guards against runaway paths",
-            ),
-            (
-                "direct",
-                "direct-light sampling: mis (next-event + hemisphere, power heuristic; default), next-event, \
-                 hemisphere",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        if self.samples == 0 {
-            return Err(SolveError::param(
-                "samples",
-                "must be at least 1 (2 or more to get a standard error)",
-            ));
-        }
-        if self.max_depth == 0 {
-            return Err(SolveError::param(
-                "max_depth",
-                "must be at least 1 (1 = direct light only)",
-            ));
-        }
-        Ok(())
-    }
-}
+impl MethodParams for PointParams {}
 
 /// A point on a surface at which radiosity is estimated.
 #[derive(Clone, Copy, Debug, PartialEq)]

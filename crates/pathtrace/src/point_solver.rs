@@ -22,6 +22,7 @@ use glam::DVec3;
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{FaceId, Rgb, Scene, sampling::mix64};
 use radlab_visibility::Accel;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};
@@ -34,17 +35,23 @@ use crate::running_stats::RunningStats;
 /// Mixed into the seed so the method's streams differ from the reference estimator's.
 pub const METHOD_STREAM_TAG: u64 = 0x7061_7468_7472_6163; // "pathtrac"
 
-/// Parameters of path tracing as a method.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of path tracing as a method, each declared once on its field (doc comment: help; `schemars`
+/// attribute: range; default: `impl Default`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct PathTraceParams {
-    /// Paths per point when the method stops (default 1024).
+    /// Paths per point when the method stops; the standard error falls as 1/√samples (2 or more give a
+    /// standard error).
+    #[schemars(range(min = 1))]
     pub samples: u32,
-    /// Paths per point added by the first step (default 16); each later step doubles the count.
+    /// Paths per point added by the first step, at most samples; each later step doubles the paths.
+    #[schemars(range(min = 1))]
     pub initial_samples: u32,
-    /// Cap on path segments (default 100,000; Russian roulette ends paths without bias).
+    /// Cap on path segments (1: direct light only); Russian roulette ends paths without bias.
+    #[schemars(range(min = 1))]
     pub max_depth: u32,
-    /// How direct light is sampled at each path vertex (default `mis`).
+    /// How direct light is sampled at each path vertex: mis (next-event and hemisphere sampling, power
+    /// heuristic), next-event or hemisphere.
     pub direct: DirectSampling,
 }
 
@@ -60,47 +67,14 @@ impl Default for PathTraceParams {
 }
 
 impl MethodParams for PathTraceParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "samples",
-                "paths per point when the method stops (default 1024); standard error falls as 1/sqrt(samples)",
-            ),
-            (
-                "initial_samples",
-                "paths per point of the first step (default 16); every later step doubles the paths",
-            ),
-            (
-                "max_depth",
-                "cap on path segments (default 100000); Russian roulette ends paths without bias",
-            ),
-            (
-                "direct",
-                "direct-light sampling: mis (default), next-event, hemisphere",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        if self.samples == 0 {
-            return Err(SolveError::param(
-                "samples",
-                "must be at least 1 (2 or more to get a standard error)",
-            ));
-        }
-        if self.initial_samples == 0 || self.initial_samples > self.samples {
+    fn check_combination(&self) -> Result<(), SolveError> {
+        if self.initial_samples > self.samples {
             return Err(SolveError::param(
                 "initial_samples",
                 format!(
                     "{} must be between 1 and samples ({})",
                     self.initial_samples, self.samples
                 ),
-            ));
-        }
-        if self.max_depth == 0 {
-            return Err(SolveError::param(
-                "max_depth",
-                "must be at least 1 (1 = direct light only)",
             ));
         }
         Ok(())

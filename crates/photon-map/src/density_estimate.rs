@@ -22,7 +22,9 @@ use serde::{Deserialize, Serialize};
 use crate::photon_tracing::Photon;
 
 /// The density-estimation filter.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum DensityFilter {
     /// Jensen's cone filter, w = 1 − d/r (k_c = 1), normalisation 1/3. The default.

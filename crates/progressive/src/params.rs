@@ -9,6 +9,7 @@ use radlab_answer::{Reconstruction, default_element_size};
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
 use radlab_scene::Scene;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Default shooting patch size as a multiple of the element size: each patch shoots from about 2 × 2 elements.
@@ -23,7 +24,7 @@ pub const DEFAULT_STOP_UNSHOT_FRACTION: f64 = 2e-3;
 pub const DEFAULT_MEMORY_BUDGET_MIB: f64 = 2048.0;
 
 /// What a shot sends.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Overshoot {
     /// Plain Southwell shooting (Cohen, Chen, Wallace & Greenberg 1988): a patch sends exactly its unshot
@@ -37,47 +38,67 @@ pub enum Overshoot {
     Ambient,
 }
 
-/// Parameters of [`crate::ProgressiveSolver`]. Every field has a documented default (see [`MethodParams::docs`]).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of [`crate::ProgressiveSolver`], each declared once: its doc comment's first paragraph is the
+/// help `radlab methods` prints, its `schemars` attribute the accepted range, and its default is in
+/// `impl Default`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ProgressiveParams {
-    /// Receiving element size (longest edge, scene units). Default: 1/20 of the scene's bounding diagonal.
+    /// Receiving element size (longest edge, scene units); unset: 1/20 of the scene's bounding diagonal.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,
-    /// Shooting patch size (scene units), at least `element_size`; equal to it turns substructuring off.
-    /// Default: [`DEFAULT_PATCH_FACTOR`] × element size.
+    /// Shooting patch size (scene units), at least element_size; equal to it turns substructuring off; unset:
+    /// 2 × element_size ([`DEFAULT_PATCH_FACTOR`]).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub patch_size: Option<f64>,
-    /// Shots per call of `step()` (the answer does not depend on it, only the granularity of a trace). Default 1.
+    /// Shots per call of step(); the answer does not depend on it, only the granularity of a trace.
+    #[schemars(range(min = 1))]
     pub shots_per_step: u32,
-    /// Visibility estimate between a receiving element and a shooting patch that emits (direct light, hence
-    /// shadows). Default `jittered4x4` (16 rays).
+    /// Visibility rays between a receiving element and a shooting patch that emits (direct light, hence
+    /// shadows).
     pub visibility: VisibilitySampling,
-    /// Visibility estimate for shots from patches that do not emit (interreflected light, smoother). Default
-    /// `jittered2x2` (4 rays).
+    /// Visibility rays for shots from patches that do not emit (interreflected light, smoother); when both
+    /// settings are jittered, each element also gets its open share (128 rays: the part not sealed under a
+    /// touching panel).
     pub indirect_visibility: VisibilitySampling,
-    /// Receiver quadrature: m × m points per element at which the point-to-polygon factor is evaluated. Default 1
-    /// (the centroid).
+    /// Receiver quadrature: m × m points per element at which the point-to-polygon factor is evaluated (1: the
+    /// centroid).
+    #[schemars(range(min = 1, max = 16))]
     pub quadrature: u32,
-    /// Stop once the unshot power is at most this fraction of the emitted power (worst channel). Default 2e-3.
+    /// Stop once the unshot power is at most this fraction of the emitted power (worst channel); use
+    /// max_shots to run a fixed number of shots.
+    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
     pub stop_unshot_fraction: f64,
-    /// Stop after this many shots whatever the unshot power. Default: no limit.
+    /// Stop after this many shots whatever the unshot power; unset: no limit.
+    #[schemars(range(min = 1))]
     pub max_shots: Option<u64>,
-    /// Adaptive subdivision of elements across large radiosity contrasts. Default on.
+    /// Split elements across radiosity contrasts above adaptive_threshold.
     pub adaptive: bool,
     /// Relative contrast |B_a − B_b| / max(B_a, B_b) (channel sums) between neighbouring elements of a face
-    /// above which both are split. Default [`DEFAULT_ADAPTIVE_THRESHOLD`].
+    /// above which both are split; set adaptive = false to turn subdivision off.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub adaptive_threshold: f64,
-    /// Smallest element edge adaptive subdivision may create (scene units). Default: element size / 4.
+    /// Smallest element edge adaptive subdivision may create (scene units); unset: element_size / 4.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub min_element_size: Option<f64>,
-    /// Add the ambient term (Cohen et al. 1988) to displayed radiosity. Default off: it is an estimate, not part
-    /// of the solution, and is kept out of error measurements unless asked for.
+    /// Add the ambient term (Cohen et al. 1988) to displayed radiosity.
+    ///
+    /// Off by default: it is an estimate, not part of the solution, and is kept out of error measurements
+    /// unless asked for.
     pub ambient: bool,
-    /// Memory the solver may hold (MiB); a mesh or refinement beyond it is an error. Default 2048.
+    /// Memory the solver may hold (MiB); a mesh or refinement beyond it is an error.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
-    /// What a shot sends: `none` (plain shooting) or `ambient` (overshooting). Default `ambient`, which needs
-    /// far fewer shots at high reflectance (see the crate documentation for measurements).
+    /// What a shot sends: none (plain Southwell shooting, the unshot radiosity) or ambient (the unshot
+    /// radiosity plus the ambient estimate of what the patch will still receive, Feda & Purgathofer 1992).
+    ///
+    /// Ambient overshooting needs far fewer shots at high reflectance (see the crate documentation).
     pub overshoot: Overshoot,
-    /// How radiosity at a point is answered from the element values: `constant`, `gouraud` or
-    /// `final-gather` (radlab_answer::reconstruction). Default [`DEFAULT_RECONSTRUCTION`].
+    /// How radiosity at a point is answered from the element values: constant, gouraud (vertex-interpolated)
+    /// or final-gather (one more gather with exact point-to-polygon factors and rays, charged to answering).
+    ///
+    /// See `radlab_answer::reconstruction`; a final gather costs rays per query, so images of large meshes are
+    /// slow.
     pub reconstruction: Reconstruction,
 }
 
@@ -129,16 +150,6 @@ pub(crate) struct Resolved {
     pub element_size: f64,
     pub patch_size: f64,
     pub min_element_size: f64,
-}
-
-fn positive_length(name: &str, v: Option<f64>) -> Result<(), SolveError> {
-    match v {
-        Some(x) if !(x.is_finite() && x > 0.0) => Err(SolveError::param(
-            name,
-            format!("{x} is not a finite length > 0 (scene units); leave it unset for the default"),
-        )),
-        _ => Ok(()),
-    }
 }
 
 impl ProgressiveParams {
@@ -193,132 +204,7 @@ impl ProgressiveParams {
     }
 }
 
-impl MethodParams for ProgressiveParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        vec![
-            (
-                "element_size",
-                "receiving element size, scene units (default: 1/20 of the scene's bounding diagonal)",
-            ),
-            (
-                "patch_size",
-                "shooting patch size, >= element_size; equal turns substructuring off (default: 2 x element_size)",
-            ),
-            (
-                "shots_per_step",
-                "shots per step(); does not change the answer (default 1)",
-            ),
-            (
-                "visibility",
-                "visibility between a receiving element and an emitting shooter (direct light): unoccluded | \
-                 centre | jittered2x2 | jittered4x4 | jittered8x8 (default jittered4x4, 16 rays)",
-            ),
-            (
-                "indirect_visibility",
-                "visibility for shots from patches that do not emit (interreflection), same choices \
-                 (default jittered2x2, 4 rays); when both settings are jittered, each element also gets its \
-                 open share (128 rays: the part not sealed under a touching panel)",
-            ),
-            (
-                "quadrature",
-                "m: m x m receiver points per element for the point-to-polygon factor, 1..16 (default 1)",
-            ),
-            (
-                "stop_unshot_fraction",
-                "stop when unshot power <= this fraction of emitted power, (0, 1] (default 2e-3)",
-            ),
-            (
-                "max_shots",
-                "stop after this many shots (default: no limit)",
-            ),
-            (
-                "adaptive",
-                "split elements across radiosity contrasts above adaptive_threshold (default true)",
-            ),
-            (
-                "adaptive_threshold",
-                "relative contrast |Ba - Bb| / max(Ba, Bb) between neighbours that splits them, > 0 (default 0.3)",
-            ),
-            (
-                "min_element_size",
-                "smallest element edge adaptive subdivision creates (default: element_size / 4)",
-            ),
-            (
-                "ambient",
-                "add the ambient term of Cohen et al. 1988 to displayed radiosity (default false)",
-            ),
-            (
-                "memory_budget_mib",
-                "memory the solver may hold, MiB (default 2048)",
-            ),
-            (
-                "overshoot",
-                "what a shot sends: none (plain Southwell shooting, unshot radiosity only) | ambient (unshot plus \
-                 the ambient estimate of what the patch will still receive, Feda & Purgathofer 1992) \
-                 (default ambient)",
-            ),
-            (
-                "reconstruction",
-                "point answers from the element values: constant | gouraud (vertex-interpolated) | \
-                 final-gather (one more gather with exact point-to-polygon factors and rays, counted in the \
-                 answering cost); default final-gather (Cornell box, 512 points: relative L1 2.2% against 8.5% constant and \
-                 7.2% gouraud at 110 mm elements; a gather costs rays per query, so images of large meshes are slow)",
-            ),
-        ]
-    }
-
-    fn validate(&self) -> Result<(), SolveError> {
-        positive_length("element_size", self.element_size)?;
-        positive_length("patch_size", self.patch_size)?;
-        positive_length("min_element_size", self.min_element_size)?;
-        if self.shots_per_step == 0 {
-            return Err(SolveError::param("shots_per_step", "must be at least 1"));
-        }
-        if !(1..=16).contains(&self.quadrature) {
-            return Err(SolveError::param(
-                "quadrature",
-                format!(
-                    "{} is outside 1..=16 (m x m receiver points per element)",
-                    self.quadrature
-                ),
-            ));
-        }
-        let f = self.stop_unshot_fraction;
-        if !(f.is_finite() && f > 0.0 && f <= 1.0) {
-            return Err(SolveError::param(
-                "stop_unshot_fraction",
-                format!(
-                    "{f} is outside (0, 1]; it is the fraction of emitted power left unshot at which to stop \
-                     (use max_shots to run a fixed number of shots)"
-                ),
-            ));
-        }
-        if self.max_shots == Some(0) {
-            return Err(SolveError::param(
-                "max_shots",
-                "must be at least 1 (leave it unset for no limit)",
-            ));
-        }
-        let t = self.adaptive_threshold;
-        if !(t.is_finite() && t > 0.0) {
-            return Err(SolveError::param(
-                "adaptive_threshold",
-                format!(
-                    "{t} is not a finite relative contrast > 0 (e.g. 0.3); set adaptive = false to turn \
-                     subdivision off"
-                ),
-            ));
-        }
-        let m = self.memory_budget_mib;
-        if !(m.is_finite() && m > 0.0) {
-            return Err(SolveError::param(
-                "memory_budget_mib",
-                format!("{m} is not a finite number of MiB > 0"),
-            ));
-        }
-        Ok(())
-    }
-}
+impl MethodParams for ProgressiveParams {}
 
 #[cfg(test)]
 mod tests {
@@ -346,9 +232,8 @@ mod tests {
         assert_eq!(p.element_size, Some(0.1));
         assert!(!p.adaptive);
         assert_eq!(p.max_shots, Some(10));
-        let names: Vec<&str> = ProgressiveParams::docs().iter().map(|d| d.0).collect();
-        for (k, _) in ProgressiveParams::default_values() {
-            assert!(names.contains(&k.as_str()), "{k} undocumented");
+        for d in ProgressiveParams::declarations() {
+            assert!(!d.help.is_empty(), "{} undocumented", d.name);
         }
     }
 

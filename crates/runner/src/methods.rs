@@ -16,16 +16,8 @@ pub type BuildFn = for<'a> fn(
     &[EvalPoint],
 ) -> Result<Box<dyn Solver + 'a>, SolveError>;
 
-/// One documented parameter.
-#[derive(Clone, Debug)]
-pub struct ParamLine {
-    /// Name (the key of `--set key=value`).
-    pub name: String,
-    /// Default value, TOML syntax.
-    pub default: String,
-    /// What it does.
-    pub doc: String,
-}
+/// One declared parameter (name, kind, range, default, help), as `radlab methods` prints it.
+pub type ParamLine = radlab_method::ParamDecl;
 
 /// A method's test-sized settings, read by the conformance suite (`crates/runner/tests/conformance.rs`): small
 /// enough that every case runs in seconds, with the energy-balance tolerance the method states at them.
@@ -65,20 +57,9 @@ pub struct MethodInfo {
     pub test: TestSettings,
 }
 
-/// Parameter lines of a params type: its docs with its defaults.
+/// The parameter lines of a params type: its declarations.
 pub fn param_lines<P: MethodParams>() -> Vec<ParamLine> {
-    let defaults = P::default_values();
-    P::docs()
-        .into_iter()
-        .map(|(name, doc)| ParamLine {
-            name: name.to_string(),
-            default: defaults
-                .iter()
-                .find(|(k, _)| k == name)
-                .map_or_else(|| "(none)".to_string(), |(_, v)| v.clone()),
-            doc: doc.to_string(),
-        })
-        .collect()
+    P::declarations()
 }
 
 macro_rules! method {

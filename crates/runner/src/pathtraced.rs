@@ -22,7 +22,7 @@ pub const SUMMARY: &str = "Path tracing at the points asked about (next-event es
     estimator with many paths is the reference. `render` path-traces the camera (parameter samples_per_pixel).";
 
 /// Its parameters (per-point, then render), each name once: a key both read with the same default
-/// (`max_depth`, `direct`) is listed with the per-point text and, where render reads it differently, render's
+/// (`max_depth`, `direct`) is listed with the per-point help and, where render reads it differently, render's
 /// after it.
 pub fn params() -> Vec<ParamLine> {
     let mut p = param_lines::<PathTraceParams>();
@@ -31,7 +31,7 @@ pub fn params() -> Vec<ParamLine> {
             .iter_mut()
             .find(|l| l.name == r.name && l.default == r.default)
         {
-            Some(l) if l.doc != r.doc => l.doc = format!("{}; for render, {}", l.doc, r.doc),
+            Some(l) if l.help != r.help => l.help = format!("{} For render: {}", l.help, r.help),
             Some(_) => {}
             None => p.push(r),
         }

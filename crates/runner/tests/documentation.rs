@@ -126,7 +126,7 @@ fn documented_defaults_match_the_defaults_in_use() {
     let mut wrong = Vec::new();
     for m in radlab_runner::methods::methods() {
         for p in (m.params)() {
-            let Some(stated) = stated_default(&p.doc) else {
+            let Some(stated) = stated_default(&p.help) else {
                 continue;
             };
             let actual = p.default.trim_matches('"');
@@ -168,4 +168,70 @@ fn stated_defaults_are_parsed() {
     assert_eq!(stated_default("x (default: true)").as_deref(), Some("true"));
     assert_eq!(stated_default("x (default: scene diagonal / 150)"), None);
     assert_eq!(stated_default("no default here"), None);
+}
+
+/// Whether `text` holds a date written 2026-12-02.
+fn holds_a_date(text: &str) -> bool {
+    let b = text.as_bytes();
+    b.windows(10).any(|w| {
+        w.iter().enumerate().all(|(i, c)| match i {
+            4 | 7 => *c == b'-',
+            _ => c.is_ascii_digit(),
+        })
+    })
+}
+
+#[test]
+fn every_parameter_is_declared_and_its_range_enforced() {
+    // Every parameter of every registered method has a help line and a default in `radlab methods` (no dated
+    // measurement as help), and a value just outside a declared range is refused naming the key and the range.
+    for m in radlab_runner::methods::methods() {
+        let params = (m.params)();
+        assert!(!params.is_empty(), "{} lists no parameters", m.name);
+        for p in &params {
+            let what = format!("{} {}", m.name, p.name);
+            assert!(!p.help.is_empty(), "{what}: no help");
+            assert!(!p.default.is_empty(), "{what}: no default");
+            assert!(
+                !holds_a_date(&p.help),
+                "{what}: a dated help line: {}",
+                p.help
+            );
+            let Some(range) = p.range else { continue };
+            let whole = p.kind == "whole number";
+            let outside = match (range.min, range.max) {
+                (Some((x, true)), _) => x - 1.0,
+                (Some((x, false)), _) => x,
+                (None, Some((x, true))) => x + 1.0,
+                (None, Some((x, false))) => x,
+                (None, None) => continue,
+            };
+            let value = if whole {
+                toml::Value::Integer(outside as i64)
+            } else {
+                toml::Value::Float(outside)
+            };
+            let table = toml::Table::from_iter([(p.name.clone(), value.clone())]);
+            let mut e = (m.validate)(table.clone())
+                .expect_err(&format!("{what} = {value} refused"))
+                .to_string();
+            if e.contains("unknown parameter") && m.name == "pathtrace" {
+                // Render's own parameters are read by `render`, not by the method's solver.
+                use radlab_method::MethodParams;
+                e = radlab_pathtrace::RenderParams::from_table(table)
+                    .expect_err(&format!("{what} = {value} refused by render"))
+                    .to_string();
+            }
+            assert!(
+                e.contains(&format!("'{}'", p.name)) && e.contains(&range.phrase(whole)),
+                "{what} = {value}: {e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn dates_are_found() {
+    assert!(holds_a_date("the quickstart of 2026-12-02, later"));
+    assert!(!holds_a_date("1e-4, 1..=16, 100000"));
 }

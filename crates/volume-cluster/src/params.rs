@@ -5,10 +5,11 @@
 
 use radlab_hierarchical::{ErrorNorm, HierarchicalParams};
 use radlab_method::{MethodParams, SolveError};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// How light crosses a link with a cluster end.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Transfer {
     /// A cluster acts as projected area A/4 in every direction (Smits et al. 1994 β links; Sillion 1995
@@ -28,7 +29,7 @@ pub enum Transfer {
 }
 
 /// Whether the discrete operator's rows are rescaled to sum to one in a closed scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum RowNormalisation {
     /// Where the enclosure rays find the scene closed (every ray from every face hits the front of a face),
@@ -44,21 +45,31 @@ pub enum RowNormalisation {
     Off,
 }
 
-/// Parameters of [`crate::VolumeClusterSolver`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Parameters of [`crate::VolumeClusterSolver`]: its own, and the hierarchical engine's flattened in (all but
+/// `lazy_linking`), each declared once on its field (doc comment: help; `schemars` attribute: range; default:
+/// `impl Default`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default)]
 pub struct VolumeClusterParams {
-    /// Cluster transfer. Default [`Transfer::Alpha`].
+    /// How light crosses a link with a cluster end: isotropic (a cluster is projected area A/4 every way),
+    /// alpha (per-face cosines through normal cones, exact sources) or directional (alpha's receiver,
+    /// spherical-harmonic sources).
     pub transfer: Transfer,
-    /// Row normalisation. Default [`RowNormalisation::Off`].
+    /// off (the rows are what the transfer computes) or closed-scenes (where every enclosure ray hits the
+    /// front of a face, each leaf's row is rescaled to sum to one, as an enclosure's form factors do).
+    ///
+    /// With closed-scenes a closed furnace holds by construction, whatever the transfer.
     pub row_normalisation: RowNormalisation,
-    /// The widest normal cone, as a half-angle in degrees, at which a receiving cluster that a link straddles
-    /// (some of its faces turned toward the source, some away) takes the link as a whole under the α and
-    /// directional transfers: every face below it receives the faces' mean clamped cosine
+    /// The widest normal cone (half-angle, degrees) at which a cluster straddled by a link takes it whole
+    /// under alpha and directional, every face receiving the faces' mean clamped cosine; 0 hands every
+    /// straddled link down to the faces.
+    ///
+    /// Every face below it receives the faces' mean clamped cosine
     /// ([`crate::normal_cone::NormalCone::mean_clamped_cosine`], within sin(2θ)/2 of a face square to the
-    /// link for θ ≤ 45°). Wider straddled clusters hand the link to their children, down to the faces where the surface
-    /// turns away from the source: on a smooth surface about √m of a cluster's m faces, a cost per link that
-    /// grows with the number of faces. 0 takes every straddled link down to the faces. Default
-    /// 5 (`DEFAULT_STRADDLE_ANGLE`).
+    /// link for θ ≤ 45°). Wider straddled clusters hand the link to their children, down to the faces where
+    /// the surface turns away from the source: on a smooth surface about √m of a cluster's m faces, a cost per
+    /// link that grows with the number of faces.
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 90))]
     pub straddle_angle: f64,
     /// The hierarchical engine's parameters (ε, oracle, schedule, visibility, gather, interpolation, …).
     #[serde(flatten)]
@@ -90,135 +101,15 @@ pub const DEFAULT_EPSILON: f64 = 1e-4;
 pub const DEFAULT_STRADDLE_ANGLE: f64 = 5.0;
 
 impl MethodParams for VolumeClusterParams {
-    fn docs() -> Vec<(&'static str, &'static str)> {
-        let mut d = vec![(
-            "transfer",
-            "isotropic (A/4 clusters) | alpha (default: per-face cosines through normal cones, exact sources) | \
-             directional (the same receiver, spherical-harmonic sources): how light crosses a link with a cluster \
-             end",
-        )];
-        d.push((
-            "row_normalisation",
-            "off (default: the rows are what the transfer computes) | closed-scenes (where every enclosure ray \
-             hits the front of a face, each leaf's row is rescaled to sum to one, as an enclosure's form factors \
-             do; a closed furnace then holds by construction)",
-        ));
-        d.push((
-            "straddle_angle",
-            "the widest normal cone (half-angle, degrees, in [0, 90)) at which a cluster straddled by a link takes \
-             it whole, every face receiving the faces' mean clamped cosine, under alpha and directional (default \
-             5; 0 hands every straddled link down to the faces, at a cost per link growing with the face count)",
-        ));
-        d.extend(
-            HierarchicalParams::docs()
-                .into_iter()
-                .filter(|(k, _)| *k != "lazy_linking")
-                .map(|(k, v)| match k {
-                    "epsilon" => (
-                        k,
-                        "refinement threshold: the largest power a link may carry unresolved, as a fraction of \
-                         the scene's (default 1e-4)",
-                    ),
-                    "error_norm" => (
-                        k,
-                        "power (default: a link's estimate times its receiver's share of the scene's area) | \
-                         radiosity (irradiance relative to the mean; drives links down to every face)",
-                    ),
-                    _ => (k, v),
-                }),
-        );
-        d
-    }
+    const REFUSED: &'static [(&'static str, &'static str)] = &[(
+        "lazy_linking",
+        "volume clusters start from one root self-link, so there are no initial links to make lazily; \
+         remove the parameter",
+    )];
 
-    fn validate(&self) -> Result<(), SolveError> {
-        if !(self.straddle_angle >= 0.0 && self.straddle_angle < 90.0) {
-            return Err(SolveError::param(
-                "straddle_angle",
-                format!(
-                    "{} is not a half-angle in degrees in [0, 90); use e.g. {DEFAULT_STRADDLE_ANGLE} \
-                     (the default), or 0 to take straddled links down to the faces",
-                    self.straddle_angle
-                ),
-            ));
-        }
-        self.engine.validate()
+    fn check_combination(&self) -> Result<(), SolveError> {
+        self.engine.check_combination()
     }
-
-    fn default_values() -> Vec<(String, String)> {
-        let transfer = toml::Value::try_from(Transfer::default())
-            .map_or_else(|_| String::new(), |v| v.to_string());
-        let rows = toml::Value::try_from(RowNormalisation::default())
-            .map_or_else(|_| String::new(), |v| v.to_string());
-        let mut v = vec![
-            ("transfer".to_string(), transfer),
-            ("row_normalisation".to_string(), rows),
-            (
-                "straddle_angle".to_string(),
-                toml::Value::Float(DEFAULT_STRADDLE_ANGLE).to_string(),
-            ),
-        ];
-        // This method's own engine defaults (ε and the error norm differ from hierarchical's).
-        if let Ok(toml::Value::Table(t)) = toml::Value::try_from(Self::default().engine) {
-            v.extend(
-                t.into_iter()
-                    .filter(|(k, _)| k != "lazy_linking")
-                    .map(|(k, x)| (k, x.to_string())),
-            );
-        }
-        v
-    }
-
-    /// Takes `transfer` out and reads the rest as the engine's parameters, so an unknown key is named by the
-    /// engine's strict reader.
-    fn from_table(mut table: toml::Table) -> Result<Self, SolveError> {
-        let transfer = own_key(
-            &mut table,
-            "transfer",
-            "use isotropic, alpha or directional",
-        )?;
-        let row_normalisation =
-            own_key(&mut table, "row_normalisation", "use closed-scenes or off")?;
-        let straddle_angle = own_key::<Option<f64>>(
-            &mut table,
-            "straddle_angle",
-            "use a half-angle in degrees such as 5",
-        )?
-        .unwrap_or(DEFAULT_STRADDLE_ANGLE);
-        if table.remove("lazy_linking").is_some() {
-            return Err(SolveError::param(
-                "lazy_linking",
-                "volume clusters start from one root self-link, so there are no initial links to make lazily; \
-                 remove the parameter",
-            ));
-        }
-        // The user's keys over this method's defaults, read by the engine's strict reader.
-        let mut full = toml::Table::try_from(Self::default().engine)
-            .map_err(|e| SolveError::param("parameters", e.to_string()))?;
-        full.extend(table);
-        let engine = HierarchicalParams::from_table(full)?;
-        let p = Self {
-            transfer,
-            row_normalisation,
-            straddle_angle,
-            engine,
-        };
-        p.validate()?;
-        Ok(p)
-    }
-}
-
-/// Takes `key` out of `table` and reads it as a `T` (its default if absent); `fix` says how to fix a bad
-/// value.
-fn own_key<T: serde::de::DeserializeOwned + Default>(
-    table: &mut toml::Table,
-    key: &str,
-    fix: &str,
-) -> Result<T, SolveError> {
-    let Some(v) = table.remove(key) else {
-        return Ok(T::default());
-    };
-    v.try_into::<T>()
-        .map_err(|e| SolveError::param(key, format!("{}; {fix}", e.message())))
 }
 
 #[cfg(test)]
@@ -248,24 +139,28 @@ mod tests {
                 .to_string();
             assert!(e.contains(k), "{k}={v}: {e}");
         }
-        let defaults = VolumeClusterParams::default_values();
-        let eps = defaults
-            .iter()
-            .find(|(k, _)| k == "epsilon")
-            .map(|(_, v)| v.as_str());
+        let decls = VolumeClusterParams::declarations();
+        let default = |name: &str| {
+            decls
+                .iter()
+                .find(|d| d.name == name)
+                .map(|d| d.default.clone())
+        };
         assert_eq!(
-            eps,
-            Some(&*DEFAULT_EPSILON.to_string()),
+            default("epsilon"),
+            Some(DEFAULT_EPSILON.to_string()),
             "listed epsilon default"
         );
-        let norm = defaults
-            .iter()
-            .find(|(k, _)| k == "error_norm")
-            .map(|(_, v)| v.as_str());
-        assert_eq!(norm, Some("\"power\""), "listed error_norm default");
-        let names: Vec<&str> = VolumeClusterParams::docs().iter().map(|d| d.0).collect();
-        for (k, _) in VolumeClusterParams::default_values() {
-            assert!(names.contains(&k.as_str()), "{k} undocumented");
-        }
+        assert_eq!(default("error_norm").as_deref(), Some("power"));
+        assert_eq!(default("lazy_linking"), None, "refused, not listed");
+        let e = VolumeClusterParams::from_pairs(&[("lazy_linking".into(), "true".into())])
+            .expect_err("refused")
+            .to_string();
+        assert!(e.contains("lazy_linking") && e.contains("remove"), "{e}");
+        // Only the keys given are overridden; the rest keep this method's defaults.
+        let p =
+            VolumeClusterParams::from_pairs(&[("quadrature".into(), "3".into())]).expect("valid");
+        assert_eq!(p.engine.epsilon, DEFAULT_EPSILON);
+        assert_eq!(p.engine.error_norm, ErrorNorm::Power);
     }
 }

@@ -25,7 +25,17 @@ use radlab_scene::{FaceId, Polygon, sampling};
 use radlab_visibility::{Accel, Segment};
 
 /// How a visibility fraction between two elements is estimated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum VisibilitySampling {
     /// Assume the two are mutually visible (no rays): exact only in convex enclosures.

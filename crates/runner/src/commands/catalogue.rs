@@ -2,9 +2,11 @@
 
 use crate::methods::{self, ParamLine};
 
+/// Each parameter on two lines: name, what it takes and its default; then its help.
 fn print_params(params: &[ParamLine]) {
     for p in params {
-        println!("    {:<24} default {:<14} {}", p.name, p.default, p.doc);
+        println!("    {:<22} {}; default {}", p.name, p.accepts(), p.default);
+        println!("        {}", p.help);
     }
 }
 
