@@ -9,7 +9,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let spec = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "builtin:bumpy-sphere?faces=100000".to_string());
-    let scene = radlab_scene::load_scene(&spec)?;
+    let scene = radlab_formats::load_scene(&spec)?;
     // An optional second argument sets the balance weight.
     let mut params = FaceClusterParams::default();
     if let Some(w) = std::env::args().nth(2) {

@@ -80,7 +80,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let params = FaceClusterSolveParams::from_pairs(&pairs)?;
-    let scene = radlab_scene::load_scene(&spec)?;
+    let scene = radlab_formats::load_scene(&spec)?;
     let accel = Accel::new(&scene);
     let mut s = FaceClusterSolver::new(&scene, &accel, params, 1)?;
     for _ in 0..1000 {

@@ -3,12 +3,12 @@
 //! warnings (dropped degenerate faces, default materials, clamped colours) reported on stderr.
 
 use anyhow::Result;
+use radlab_formats::{LoadNotes, load_scene_with_notes};
 use radlab_scene::Scene;
-use radlab_scene::io::{LoadNotes, load_scene_with_notes};
 
 /// Loads and validates a scene, quietly.
 pub fn load(spec: &str) -> Result<Scene> {
-    Ok(radlab_scene::load_scene(spec)?)
+    Ok(radlab_formats::load_scene(spec)?)
 }
 
 /// Loads and validates a scene, printing what was dropped or defaulted to stderr.

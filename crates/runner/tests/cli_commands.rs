@@ -59,7 +59,7 @@ fn solve_cornell_writes_csv_ply_exr() {
     assert!(o.status.success(), "{}", text(&o));
     let mut faces = csv::Reader::from_path(out.join("faces.csv")).expect("faces.csv");
     let rows: Vec<_> = faces.records().map(|r| r.expect("row")).collect();
-    let scene = radlab_scene::load_scene("builtin:cornell").expect("cornell");
+    let scene = radlab_formats::load_scene("builtin:cornell").expect("cornell");
     assert_eq!(rows.len(), scene.faces.len(), "one row per face");
     let ply = std::fs::read(out.join("radiosity.ply")).expect("ply");
     assert!(ply.starts_with(b"ply\nformat binary_little_endian 1.0\n"));

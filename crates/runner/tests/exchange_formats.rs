@@ -133,7 +133,7 @@ fn cornell_mgf_has_builtin_cornells_matrix_radiosity() {
 #[test]
 fn export_writes_complete_radiance_and_mitsuba_scenes() {
     let tmp = tempfile::tempdir().expect("tmp");
-    let scene = radlab_scene::load_scene("builtin:cornell").expect("cornell");
+    let scene = radlab_formats::load_scene("builtin:cornell").expect("cornell");
     let rad = tmp.path().join("rad");
     let o = radlab(
         tmp.path(),

@@ -5,8 +5,8 @@ mod analytic;
 mod cornell;
 mod detailed_meshes;
 mod furnace_sphere;
-pub(crate) mod primitives;
-pub(crate) mod spectrum_rgb;
+pub mod primitives;
+pub mod spectrum_rgb;
 
 pub use cornell::{cornell_fov_deg, cornell_light_exitance, cornell_reflectances};
 pub use spectrum_rgb::{

@@ -1,5 +1,7 @@
+//! # radlab-formats
+//!
 //! Scene input: `load_scene` turns a scene spec into a validated [`Scene`]. A spec is `builtin:NAME[?k=v&...]`
-//! (see [`crate::builtin()`]) or a path whose extension picks the format:
+//! (see [`radlab_scene::builtin()`]) or a path whose extension picks the format:
 //!
 //! | extension | format | reader |
 //! |---|---|---|
@@ -10,7 +12,7 @@
 //! | `.mgf` | Materials and Geometry Format (the radiosity literature's scenes; includes, transforms, primitives) | [`mgf`] |
 //!
 //! Every error names the file and, where the format has lines, the line; nothing is half-built. Problems that
-//! are not errors are counted: degenerate faces in [`crate::SceneWarnings`], the rest in [`LoadNotes`].
+//! are not errors are counted: degenerate faces in [`radlab_scene::SceneWarnings`], the rest in [`LoadNotes`].
 
 pub mod mgf;
 pub mod obj_mtl;
@@ -25,7 +27,7 @@ use glam::DVec3;
 
 pub use transform::Transform;
 
-use crate::{Material, Scene, SceneBuilder, SceneError};
+use radlab_scene::{Material, Scene, SceneBuilder, SceneError};
 
 /// Reflectance given to faces whose file assigns them no material (grey, per channel).
 pub const DEFAULT_REFLECTANCE: f64 = 0.5;
@@ -83,7 +85,7 @@ pub fn load_scene(spec: &str) -> Result<Scene, SceneError> {
 /// Like [`load_scene`], also returning the counted [`LoadNotes`].
 pub fn load_scene_with_notes(spec: &str) -> Result<(Scene, LoadNotes), SceneError> {
     if let Some(rest) = spec.strip_prefix("builtin:") {
-        return crate::builtin::builtin(rest).map(|s| (s, LoadNotes::default()));
+        return radlab_scene::builtin::builtin(rest).map(|s| (s, LoadNotes::default()));
     }
     let path = Path::new(spec);
     let ext = extension(path);

@@ -6,9 +6,9 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
+use radlab_formats::mgf::{CHORD_TOLERANCE, circle_segments};
+use radlab_formats::{LoadNotes, load_scene_with_notes};
 use radlab_scene::glam::DVec3;
-use radlab_scene::io::mgf::{CHORD_TOLERANCE, circle_segments};
-use radlab_scene::io::{LoadNotes, load_scene_with_notes};
 use radlab_scene::{Scene, SceneError, builtin};
 
 /// Writes `files` into a fresh directory and loads the first.

@@ -16,12 +16,12 @@ use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use toml::Spanned;
 
-use super::transform::Transform;
-use super::{LoadNotes, add_mesh, line_at, merge_notes, parse_error, read_bytes, read_mesh};
-use crate::builtin::primitives::{
+use crate::transform::Transform;
+use crate::{LoadNotes, add_mesh, line_at, merge_notes, parse_error, read_bytes, read_mesh};
+use radlab_scene::builtin::primitives::{
     Fractal, add_box, add_cube_sphere, add_height_field, add_subdivided, fractal_heights,
 };
-use crate::{Camera, Material, Scene, SceneBuilder, SceneError};
+use radlab_scene::{Camera, Material, Scene, SceneBuilder, SceneError};
 
 /// A grey value or an `[x, y, z]` triple (colours, per-axis scales).
 #[derive(Clone, Copy, Debug, PartialEq)]

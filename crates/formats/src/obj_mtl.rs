@@ -13,7 +13,7 @@
 //!
 //! tobj re-indexes vertices per `o`/`g` group and per `usemtl` run; this reader welds exactly equal positions
 //! across the whole file (−0.0 and +0.0 alike), so a mesh split into groups keeps its connectivity: faces of
-//! different groups that share an edge share its two vertex indices in the [`crate::Scene`].
+//! different groups that share an edge share its two vertex indices in the [`radlab_scene::Scene`].
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -22,8 +22,8 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{PolygonMesh, line_at, parse_error, read_bytes};
-use crate::{Material, SceneError};
+use crate::{PolygonMesh, line_at, parse_error, read_bytes};
+use radlab_scene::{Material, SceneError};
 
 /// A `BufRead` over bytes that knows how far it has been read, so a parser's failure can be given a line.
 struct CountingReader<'a> {

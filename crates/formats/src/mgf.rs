@@ -16,7 +16,7 @@
 //! - **includes** `i file [transform]`, the path relative to the including file;
 //! - **materials** `m id = [template]`, `m id`, `m`, with `rd ρ` (diffuse reflectance) and `ed ε` (diffuse
 //!   emittance), each in the colour current when it is given; **colours** `c id = [template]`, `c id`, `c`,
-//!   with `cxy x y`, `cspec λmin λmax v…` and `cct T`. Colour conversion is [`crate::builtin`]'s
+//!   with `cxy x y`, `cspec λmin λmax v…` and `cct T`. Colour conversion is [`radlab_scene::builtin`]'s
 //!   (`spectrum_rgb`): (x, y, Y) → CIE XYZ → linear sRGB (IEC 61966-2-1 primaries, D65 white); reflectance is
 //!   the ratio to the equal-energy white MGF defines reflectance against, so neutral grey (x = y = 1/3) at
 //!   `rd 0.5` is 0.5 in every channel; emission is the exitance E = M · XYZ(x, y, ε). MGF's ε is in lm/m²;
@@ -44,11 +44,11 @@ use std::rc::Rc;
 
 use glam::{DAffine3, DMat3, DVec3};
 
-use super::{LoadNotes, parse_error, read_bytes};
-use crate::builtin::spectrum_rgb::{
+use crate::{LoadNotes, parse_error, read_bytes};
+use radlab_scene::builtin::spectrum_rgb::{
     blackbody_xy, reflectance_rgb_from_xyz, spectrum_xy, xyy_to_xyz, xyz_to_linear_srgb,
 };
-use crate::{Material, Scene, SceneBuilder, SceneError};
+use radlab_scene::{Material, Scene, SceneBuilder, SceneError};
 
 /// Largest distance of a tessellated circle's chords from the circle, relative to its radius.
 pub const CHORD_TOLERANCE: f64 = 0.01;

@@ -18,8 +18,8 @@ use ply_rs_bw::ply::{
     Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType,
 };
 
-use super::{ColourMaterials, PolygonMesh, parse_error, read_bytes};
-use crate::SceneError;
+use crate::{ColourMaterials, PolygonMesh, parse_error, read_bytes};
+use radlab_scene::SceneError;
 
 /// A number and its colour reading (integers / 255, floats as they are).
 fn scalar(p: &Property) -> Option<(f64, f64)> {

@@ -16,8 +16,8 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{ColourMaterials, PolygonMesh, parse_error, read_bytes};
-use crate::SceneError;
+use crate::{ColourMaterials, PolygonMesh, parse_error, read_bytes};
+use radlab_scene::SceneError;
 
 /// Reads an OFF file.
 pub fn read_off(path: &Path) -> Result<PolygonMesh, SceneError> {

@@ -6,9 +6,10 @@
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
+use radlab_formats::load_scene;
+use radlab_formats::{LoadNotes, MAX_COLOUR_REFLECTANCE, load_scene_with_notes};
 use radlab_scene::glam::{DVec3, dvec3};
-use radlab_scene::io::{LoadNotes, MAX_COLOUR_REFLECTANCE, load_scene_with_notes};
-use radlab_scene::{FaceId, Scene, SceneError, builtin, load_scene};
+use radlab_scene::{FaceId, Scene, SceneError, builtin};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
