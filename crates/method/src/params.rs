@@ -423,7 +423,7 @@ mod tests {
 
     impl MethodParams for P {
         fn check_combination(&self) -> Result<(), SolveError> {
-            if self.mode == Mode::OddOne && self.b % 2 == 0 {
+            if self.mode == Mode::OddOne && self.b.is_multiple_of(2) {
                 return Err(SolveError::param("b", "odd-one mixing needs an odd b"));
             }
             Ok(())
