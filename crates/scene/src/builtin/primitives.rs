@@ -28,7 +28,7 @@ use crate::{SceneBuilder, SceneError, sampling};
 
 /// Adds a bilinear `nu` × `nv` grid of quads over the planar convex quad `c` (counter-clockwise seen from its
 /// normal side, which the grid keeps). Returns the number of faces added.
-pub(crate) fn add_quad_grid(
+pub fn add_quad_grid(
     b: &mut SceneBuilder,
     c: [DVec3; 4],
     nu: usize,
@@ -60,7 +60,7 @@ pub(crate) fn add_quad_grid(
 }
 
 /// Adds the triangle `t` split into m² triangles of the same orientation (m segments per edge).
-pub(crate) fn add_triangle_grid(
+pub fn add_triangle_grid(
     b: &mut SceneBuilder,
     t: [DVec3; 3],
     m: usize,
@@ -101,7 +101,7 @@ pub(crate) fn add_triangle_grid(
 
 /// Adds a planar convex polygon given by its corners: quads as an n × n grid, triangles as n² triangles,
 /// anything else through the builder as it is (fanned when larger than a quad).
-pub(crate) fn add_subdivided(
+pub fn add_subdivided(
     b: &mut SceneBuilder,
     corners: &[DVec3],
     n: usize,
@@ -117,7 +117,7 @@ pub(crate) fn add_subdivided(
 
 /// The six faces of the axis-aligned box [lo, hi] as counter-clockwise corner lists seen from outside
 /// (normals pointing out of the box).
-pub(crate) fn box_faces(lo: DVec3, hi: DVec3) -> [[DVec3; 4]; 6] {
+pub fn box_faces(lo: DVec3, hi: DVec3) -> [[DVec3; 4]; 6] {
     let p = |x: bool, y: bool, z: bool| {
         dvec3(
             if x { hi.x } else { lo.x },
@@ -138,7 +138,7 @@ pub(crate) fn box_faces(lo: DVec3, hi: DVec3) -> [[DVec3; 4]; 6] {
 
 /// Adds the closed box [lo, hi], each side an n × n grid of quads, normals outward (or inward, for a room).
 /// Sides share their edge vertices, so the surface is closed and connected.
-pub(crate) fn add_box(
+pub fn add_box(
     b: &mut SceneBuilder,
     lo: DVec3,
     hi: DVec3,
@@ -213,13 +213,13 @@ fn cube_surface(
 }
 
 /// Number of triangles of a cube sphere with per-axis resolution `n`.
-pub(crate) fn cube_sphere_faces(n: [usize; 3]) -> usize {
+pub fn cube_sphere_faces(n: [usize; 3]) -> usize {
     4 * (n[0] * n[1] + n[1] * n[2] + n[2] * n[0])
 }
 
 /// The per-axis resolution whose cube sphere has the face count closest to `target` (resolutions within a
 /// factor 1.5 of each other, so cells stay near square).
-pub(crate) fn cube_sphere_resolution(target: usize) -> [usize; 3] {
+pub fn cube_sphere_resolution(target: usize) -> [usize; 3] {
     let n0 = ((target as f64 / 12.0).sqrt().floor() as usize).max(1);
     let mut best = [n0; 3];
     let mut best_err = usize::MAX;
@@ -287,7 +287,7 @@ impl LocalMesh {
 /// it must stay positive. The surface stays star-shaped about the centre (every vertex lies on its own
 /// ray from the centre), so a smooth displacement cannot make it intersect itself.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn add_cube_sphere(
+pub fn add_cube_sphere(
     b: &mut SceneBuilder,
     center: DVec3,
     radius: f64,
@@ -337,7 +337,7 @@ pub(crate) fn add_cube_sphere(
 /// heights `h` (row-major, (n_z + 1) rows of (n_x + 1) values, row index along z) added to corner.y.
 /// Triangles face +y, or −y when `flip`.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn add_height_field(
+pub fn add_height_field(
     b: &mut SceneBuilder,
     corner: DVec3,
     size: (f64, f64),
@@ -377,7 +377,7 @@ pub(crate) fn add_height_field(
 
 /// Parameters of a fractal (fBm value-noise) height field.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Fractal {
+pub struct Fractal {
     /// Peak-to-mean scale of the heights (the first octave's amplitude).
     pub amplitude: f64,
     /// Amplitude ratio between successive octaves (the gain g; 0.5 gives a fractal dimension near 2.5).
@@ -389,7 +389,7 @@ pub(crate) struct Fractal {
 }
 
 /// Heights of an (n_x + 1) × (n_z + 1) grid over the unit square (row-major, row index along z).
-pub(crate) fn fractal_heights(nx: usize, nz: usize, f: &Fractal) -> Vec<f64> {
+pub fn fractal_heights(nx: usize, nz: usize, f: &Fractal) -> Vec<f64> {
     let n = nx.max(nz).max(1);
     // The finest lattice, 2^octaves cells per side, no finer than the grid's n cells: finer octaves would be
     // sampled below their lattice spacing and alias into face-to-face jitter.
@@ -424,7 +424,7 @@ pub(crate) fn fractal_heights(nx: usize, nz: usize, f: &Fractal) -> Vec<f64> {
 }
 
 /// The grid (n_x, n_z), n_z ∈ [n_x, n_x + 2], whose 2 n_x n_z triangles come closest to `target`.
-pub(crate) fn height_field_resolution(target: usize) -> (usize, usize) {
+pub fn height_field_resolution(target: usize) -> (usize, usize) {
     let n0 = ((target as f64 / 2.0).sqrt().floor() as usize).max(1);
     let mut best = (n0, n0);
     let mut best_err = usize::MAX;

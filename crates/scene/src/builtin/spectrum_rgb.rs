@@ -60,7 +60,7 @@ const XYZ_TO_SRGB: [[f64; 3]; 3] = [
 
 /// A spectrum tabulated at increasing wavelengths (nm), linear between samples and zero outside them.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Spectrum<'a> {
+pub struct Spectrum<'a> {
     /// First wavelength, nm.
     pub start: f64,
     /// Spacing, nm.
@@ -97,7 +97,7 @@ fn cmf_at(nm: f64) -> DVec3 {
 }
 
 /// CIE XYZ of the product of spectra, normalised so a constant 1 has Y = 1 (see the module doc).
-pub(crate) fn xyz_of_product(spectra: &[Spectrum]) -> DVec3 {
+pub fn xyz_of_product(spectra: &[Spectrum]) -> DVec3 {
     let mut sum = DVec3::ZERO;
     for k in 0..=300 {
         let nm = 400.0 + k as f64;
@@ -164,7 +164,7 @@ pub fn blackbody_xy(kelvin: f64) -> Option<(f64, f64)> {
 }
 
 /// Linear sRGB of an XYZ triple.
-pub(crate) fn xyz_to_linear_srgb(xyz: DVec3) -> DVec3 {
+pub fn xyz_to_linear_srgb(xyz: DVec3) -> DVec3 {
     let m = XYZ_TO_SRGB;
     DVec3::new(
         m[0][0] * xyz.x + m[0][1] * xyz.y + m[0][2] * xyz.z,
@@ -174,13 +174,13 @@ pub(crate) fn xyz_to_linear_srgb(xyz: DVec3) -> DVec3 {
 }
 
 /// Linear sRGB of an emission spectrum (same units as the spectrum; Y = 1 for a constant 1).
-pub(crate) fn emission_rgb(light: Spectrum) -> DVec3 {
+pub fn emission_rgb(light: Spectrum) -> DVec3 {
     xyz_to_linear_srgb(xyz_of_product(&[light]))
 }
 
 /// Per-channel RGB reflectance of `reflectance` under `light`: RGB(ρ S) / RGB(S), each channel clamped to
 /// [0, 0.999].
-pub(crate) fn reflectance_rgb(reflectance: Spectrum, light: Spectrum) -> DVec3 {
+pub fn reflectance_rgb(reflectance: Spectrum, light: Spectrum) -> DVec3 {
     let lit = emission_rgb(light);
     let seen = xyz_to_linear_srgb(xyz_of_product(&[reflectance, light]));
     let ratio = |s: f64, l: f64| {
