@@ -21,7 +21,7 @@ use crate::transport::Transport;
 pub struct SurfaceOutput {
     /// Constant, Gouraud or final-gather answers from the leaves, and the data they build.
     answer: Reconstructor,
-    /// Per node id, its index among the Gouraud elements ([`gouraud_elements`]), or `u32::MAX` for a node
+    /// Per node id, its index among the Gouraud elements ([`leaf_elements`] with sealed leaves), or `u32::MAX` for a node
     /// that is not a quadtree leaf (Gouraud only; empty otherwise).
     element_index: Vec<u32>,
 }
@@ -92,13 +92,7 @@ impl SurfaceOutput {
                     .filter(|&&e| e != u32::MAX)
                     .map(|&e| e as usize)
             },
-            || {
-                if gouraud {
-                    gouraud_elements(engine)
-                } else {
-                    gather_elements(engine)
-                }
-            },
+            || leaf_elements(engine, gouraud),
         )
     }
 }
@@ -117,29 +111,16 @@ pub fn locate<N: NodeKind, T: Transport<N>>(
     Some(radlab_answer::locate::descend(&Quadtrees(engine), i, point))
 }
 
-/// Every leaf that is a quadtree element, in node order, as Gouraud interpolation sees it: its vertices
-/// take their values from all the leaves around them, sealed ones included.
-fn gouraud_elements<N: NodeKind, T: Transport<N>>(engine: &Engine<N, T>) -> Vec<ElementValue> {
+/// Every leaf that is a quadtree element, in node order, as the shared reconstructions see it, with its open
+/// share. Gouraud interpolation takes them all (a vertex's value comes from every leaf around it); a final
+/// gather (`sealed = false`) leaves out wholly sealed leaves (o = 0), which send nothing, and samples the
+/// visibility of a source with o < 1 over its area.
+fn leaf_elements<N: NodeKind, T: Transport<N>>(
+    engine: &Engine<N, T>,
+    sealed: bool,
+) -> Vec<ElementValue> {
     (0..engine.nodes().len() as u32)
-        .filter(|&i| engine.is_leaf(i))
-        .filter_map(|i| {
-            let p = engine.nodes()[i as usize].patch()?;
-            Some(ElementValue {
-                face: p.face,
-                polygon: p.polygon,
-                radiosity: engine.radiosity()[i as usize],
-                open: engine.open_shares()[i as usize],
-            })
-        })
-        .collect()
-}
-
-/// Every leaf that is a quadtree element, as a final gather sees it, with its open share (a final gather
-/// samples the visibility of a source with o < 1 over its area); wholly sealed leaves (o = 0) send nothing
-/// and are left out.
-fn gather_elements<N: NodeKind, T: Transport<N>>(engine: &Engine<N, T>) -> Vec<ElementValue> {
-    (0..engine.nodes().len() as u32)
-        .filter(|&i| engine.is_leaf(i) && engine.open_shares()[i as usize] > 0.0)
+        .filter(|&i| engine.is_leaf(i) && (sealed || engine.open_shares()[i as usize] > 0.0))
         .filter_map(|i| {
             let p = engine.nodes()[i as usize].patch()?;
             Some(ElementValue {
