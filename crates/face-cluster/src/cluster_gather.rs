@@ -114,7 +114,7 @@ pub enum NearField {
     /// Every face by its exact point-to-polygon factor and its one value (this module's gather). The default.
     #[default]
     Off,
-    /// Through radlab-scene's shared final gather over the same values ([`radlab_answer::final_gather`], the
+    /// Through radlab-answer's shared final gather over the same values ([`radlab_answer::final_gather`], the
     /// gather every finite-element method answers with): a face nearer the point than its diameter is
     /// gathered as 4 × 4 sub-polygons, each with its own visibility ray and a radiosity re-gathered at it
     /// (Lischinski, Tampieri & Greenberg 1993), so light moves within the face toward its lit side. The far

@@ -29,7 +29,7 @@
 //! its mesh, tens of millions of gathers at 10⁶ faces, where Gouraud answers cost seconds. With
 //! `gather_values = "gathered"` the values it reads are themselves gathered first, at every face's centroid
 //! (a second bounce: [`crate::cluster_gather`]), for k more gathers a solution, also charged to answering.
-//! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-scene's shared final
+//! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-answer's shared final
 //! gather over the same values, whose near field re-gathers faces close to the point as sub-polygons
 //! ([`NearField`]); its rays, kernel evaluations and bytes are charged to answering as well.
 

@@ -32,7 +32,7 @@
 //! a scene scaled by any factor gets the same elements and the same answer.
 //!
 //! ## What a leaf holds: radiosity over its open part
-//! Each leaf's open share o ∈ [0, 1] is estimated when it is first solved as a leaf (radlab-scene's
+//! Each leaf's open share o ∈ [0, 1] is estimated when it is first solved as a leaf (radlab-kernels'
 //! [`radlab_kernels::open_fraction`]: 16 stratified points × 8 cosine rays, a point sealed when every ray meets
 //! the back of a face; 0 for a leaf wholly under a floor covering or behind a lamp mounted on the ceiling),
 //! with area-sampled visibility only (the default; with `centre` or `unoccluded` o = 1). A leaf's radiosity B

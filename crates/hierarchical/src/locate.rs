@@ -1,4 +1,4 @@
-//! Locating a surface point in a face's quadtree, through radlab-scene's shared locator: the engine's nodes
+//! Locating a surface point in a face's quadtree, through radlab-answer's shared locator: the engine's nodes
 //! seen as an [`ElementTree`] (one top-level element per face, the node that is the whole face), descended by
 //! containment ([`radlab_answer::locate::descend`]).
 

@@ -3,7 +3,7 @@
 //! part. Held as area means and sent from their whole area, they send into the covering's back, which absorbs
 //! it, light that their open part should have sent: the light and shadow leaks of Baum, Mann, Smith & Winget
 //! 1991 (who split surfaces along contacts instead). Here each leaf t has an open share o_t ∈ [0, 1]
-//! ([`Transport::open_share`]: radlab_scene's probe-ray estimate, 0 where no probe point sees anything but
+//! ([`Transport::open_share`]: radlab-kernels' probe-ray estimate, 0 where no probe point sees anything but
 //! the back of a face), and every leaf's radiosity and irradiance are those of its open part.
 //!
 //! A link l = r ← s has a visibility V sampled between the whole of r and the whole of s, so it carries both

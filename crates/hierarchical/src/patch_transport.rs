@@ -4,7 +4,7 @@
 //! A link from source s to receiver r carries the transfer coefficient of the gather H_r += K_rs B_s: for
 //! patches K_rs = V_rs F_rs, with
 //!
-//! F_rs = Σ_k w_k F_{dA(x_k)→s},  x_k the receiver's Gauss points (weights w_k summing to 1; radlab-scene's
+//! F_rs = Σ_k w_k F_{dA(x_k)→s},  x_k the receiver's Gauss points (weights w_k summing to 1; radlab-kernels'
 //! [`receiver_points`], the rule matrix and progressive radiosity integrate with),
 //!
 //! the receiver-side quadrature of the exact point-to-polygon factor (Lambert's contour integral, clipped to

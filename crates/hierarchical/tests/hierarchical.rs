@@ -431,7 +431,7 @@ fn emitted_power_is_absorbed_under_the_light_driven_default_schedule() {
     assert_power_balanced(&s, "defaults");
 }
 
-/// The closed unit room of radlab-scene's test scenes with a panel (ρ = 0.5, facing up) a millimetre above
+/// The closed unit room of radlab-testkit's test scenes with a panel (ρ = 0.5, facing up) a millimetre above
 /// its floor over x, y ∈ [0.13, 0.71]: with elements no smaller than 0.25 the panel's edges cross floor
 /// leaves, which then lie partly under it, where they see only its back.
 fn covered_room() -> Scene {

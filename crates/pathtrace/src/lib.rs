@@ -1,6 +1,6 @@
 //! # radlab-pathtrace: Monte Carlo methods
 //!
-//! Three methods built on one path estimator, all on radlab-scene's shared visibility engine ([`Accel`]),
+//! Three methods built on one path estimator, all on radlab-visibility's shared engine ([`Accel`]),
 //! sampling streams and conventions (radiosity B and emission E in W/m²; radiance L = B/π; one-sided faces
 //! that emit and reflect from their front; reflectance ρ < 1).
 //!

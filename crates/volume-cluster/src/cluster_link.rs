@@ -141,7 +141,7 @@ pub fn cluster_link(
 type PointOnFace = (DVec3, FaceId, DVec3);
 
 /// The kernel-weighted fraction of `n` sampled point pairs that see each other, Σ w v / Σ w with
-/// w = cos θ cos θ' / r² (radlab-scene's `pair_kernel`): the same estimator as the patches' visibility
+/// w = cos θ cos θ' / r² (radlab-kernels' `pair_kernel`): the same estimator as the patches' visibility
 /// fraction, so a pair behind either face (zero kernel) is no sample of visibility and near-horizon pairs
 /// weigh what they carry. No facing pair gives 0.
 fn facing_fraction_visible(

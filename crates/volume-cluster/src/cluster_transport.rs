@@ -160,7 +160,7 @@ pub struct ClusterTransport<'a, M> {
     /// Per input face: whether it shares a region of free space with an emitter ([`crate::enclosure`]);
     /// empty when not computed (every face reachable).
     reachable: Vec<bool>,
-    /// Gauss points per side of the receiver rule over a patch (radlab-scene's `receiver_points`).
+    /// Gauss points per side of the receiver rule over a patch (radlab-kernels' `receiver_points`).
     quadrature: u32,
     /// The widest normal cone (half-angle, radians) that takes a link straddling its faces as a whole; 0 by
     /// default ([`ClusterTransport::with_straddle_cone`]).
