@@ -1,7 +1,8 @@
 //! # radlab-answer
 //!
 //! How a solved finite-element representation answers radiosity at a surface point: the element's constant
-//! value, Gouraud interpolation of vertex values, or a final gather B(x) = E(x) + ρ(x) Σ_j F_{x→j} V B_j with
+//! value, Gouraud interpolation of vertex values (or, for solutions holding an irradiance vector per face, of
+//! irradiance carried to each face's normal), or a final gather B(x) = E(x) + ρ(x) Σ_j F_{x→j} V B_j with
 //! exact point-to-polygon factors (and a finer gather of the elements next to x). Also element meshes over the
 //! scene's faces, the locator that finds the element under a point, and primary-ray rendering of any
 //! solution. Nothing in this crate prints or writes files.
@@ -9,6 +10,7 @@
 pub mod elements;
 pub mod final_gather;
 pub mod gouraud;
+pub mod irradiance_gouraud;
 pub mod locate;
 pub mod reconstruction;
 pub mod render;

@@ -106,6 +106,16 @@ impl ClampedIrradiance {
     }
 }
 
+impl radlab_answer::irradiance_gouraud::LinearIrradiance for ClampedIrradiance {
+    fn linear(&self, n: DVec3, k: usize) -> f64 {
+        ClampedIrradiance::linear(self, n, k)
+    }
+
+    fn vector(&self, k: usize) -> DVec3 {
+        self.vector[k]
+    }
+}
+
 impl LinearState for ClampedIrradiance {
     fn add_scaled(&mut self, c: Rgb, x: &Self) {
         self.vector.add_scaled(c, &x.vector);

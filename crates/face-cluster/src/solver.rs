@@ -38,7 +38,8 @@ use std::sync::{Arc, OnceLock};
 use glam::DVec3;
 use radlab_answer::Reconstruction;
 use radlab_answer::final_gather::{FinalGather, GatherSettings};
-use radlab_answer::gouraud::{ElementValue, interpolate_corners};
+use radlab_answer::gouraud::ElementValue;
+use radlab_answer::irradiance_gouraud;
 use radlab_hierarchical::{
     Engine, ErrorNorm, HierarchicalParams, LinearState, NodeKind, PatchKernel, SurfaceOutput,
 };
@@ -631,50 +632,15 @@ impl<'a> FaceClusterSolver<'a> {
         })
     }
 
-    /// Gouraud radiosity of `face` at `point`. With I_g(n) = n·e_g + s_g + t_g the irradiance face g's gathered
-    /// field gives a face of normal n, each face g around a corner v offers its own irradiance carried to
-    /// this face's normal n by the trapezoid rule between the two faces' fields,
-    ///
-    ///   I_g→f = I_g(n_g) + (n − n_g)·(e_g + e_f)/2,
-    ///
-    /// and the corner takes their mean weighted by A_g max(0, n·n_g) (a face across a crease counts less, one
-    /// at a right angle or beyond not at all). Where the irradiance is one linear field of the normal (a
-    /// light in front of every face) that is its value at n, to second order in the spread of normals times
-    /// the spread of fields; where it does not depend on the normal at all (the inside of a furnace, whose
-    /// faces' fields point along their own normals) the two fields' slopes cancel, where carrying g's
-    /// field alone to n would lose 1 − cos of the angle between the faces. The corner values are interpolated
-    /// to the point (bilinear in a quad's parameters, linear in a triangle's) and B = E + ρ max(0, I).
+    /// Gouraud radiosity of `face` at `point`: the faces' gathered fields I_g(n) = n·e_g + s_g + t_g
+    /// interpolated by radlab-answer's [`irradiance_gouraud`] (each corner's faces carried to this face's
+    /// normal), then B = E + ρ max(0, I).
     fn gouraud_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        let fields = self.face_fields();
         let around = self
             .vertex_adjacency
             .get_or_init(|| VertexAdjacency::new(self.scene));
-        let n = self.scene.faces[face].normal;
-        let own = &fields[face];
-        let mut corners = [Rgb::ZERO; 4];
-        for (corner, &v) in corners
-            .iter_mut()
-            .zip(self.scene.faces[face].vertex_indices())
-        {
-            let mut total = 0.0;
-            for g in around.faces_around(v) {
-                let other = &self.scene.faces[g];
-                let w = other.area * n.dot(other.normal).max(0.0);
-                if w > 0.0 {
-                    let (eg, m) = (&fields[g], n - other.normal);
-                    let carried = |c: usize| {
-                        eg.linear(other.normal, c) + 0.5 * m.dot(eg.vector[c] + own.vector[c])
-                    };
-                    let carried = Rgb::new(carried(0), carried(1), carried(2));
-                    *corner += w * carried;
-                    total += w;
-                }
-            }
-            if total > 0.0 {
-                *corner /= total;
-            }
-        }
-        let irradiance = interpolate_corners(&self.scene.polygon(face), &corners, point);
+        let irradiance =
+            irradiance_gouraud::irradiance_at(self.scene, around, self.face_fields(), face, point);
         let (rho, em) = (self.scene.reflectance(face), self.scene.emission(face));
         em + rho * irradiance.max(Rgb::ZERO)
     }

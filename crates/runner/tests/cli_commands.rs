@@ -1,28 +1,10 @@
 //! End-to-end tests of `radlab solve`, `probe`, `render`, `scenes` and `methods`, and of their errors on bad
 //! input (clear message naming the file and row or field, non-zero exit, no panic, no half-written output).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
-fn radlab(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_radlab"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("radlab runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+mod support;
+use support::{radlab, repo, text};
 
 fn probe_rows(stdout: &[u8]) -> Vec<[f64; 6]> {
     let mut r = csv::Reader::from_reader(stdout);

@@ -4,28 +4,8 @@
 //! cross-checks against the renderers themselves need Radiance or Mitsuba installed and are documented in
 //! scenes/README.md; they are not run here (CI has neither).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn radlab(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_radlab"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("radlab runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+mod support;
+use support::{radlab, repo, text};
 
 fn csv_rows(bytes: &[u8]) -> (Vec<String>, Vec<Vec<String>>) {
     let mut r = csv::Reader::from_reader(bytes);

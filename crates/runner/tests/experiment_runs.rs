@@ -3,24 +3,10 @@
 //! crashing, timed-out or out-of-memory run is recorded and the experiment finishes.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn radlab(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_radlab"));
-    c.current_dir(dir).args(args);
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().expect("radlab runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod support;
+use support::{radlab_with_env, text};
 
 const TINY: &str = r#"
 name = "tiny"
@@ -62,7 +48,7 @@ fn csv_rows(p: &Path) -> Vec<csv::StringRecord> {
 
 /// `radlab run CFG --out OUT` in `dir`, which must succeed; its output.
 fn run_ok(dir: &Path, cfg: &Path, out: &Path) -> Output {
-    let o = radlab(
+    let o = radlab_with_env(
         dir,
         &[
             "run",
@@ -172,7 +158,7 @@ fn tiny_experiment_end_to_end_then_skips() {
     );
     // plot redraws from the CSVs.
     std::fs::remove_file(out.join("figures/frontier-cornell.png")).expect("rm");
-    let o = radlab(tmp.path(), &["plot", out.to_str().expect("utf8")], &[]);
+    let o = radlab_with_env(tmp.path(), &["plot", out.to_str().expect("utf8")], &[]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(out.join("figures/frontier-cornell.png").exists());
 }
@@ -233,7 +219,7 @@ fn shards_cover_every_run_once_and_merge() {
     let mut dirs = Vec::new();
     for i in 0..3 {
         let out = tmp.path().join(format!("shard{i}"));
-        let o = radlab(
+        let o = radlab_with_env(
             tmp.path(),
             &[
                 "run",
@@ -259,14 +245,14 @@ fn shards_cover_every_run_once_and_merge() {
     let merged = tmp.path().join("merged");
     let mut args = vec!["merge".to_string(), merged.display().to_string()];
     args.extend(dirs.iter().map(|d| d.display().to_string()));
-    let o = radlab(
+    let o = radlab_with_env(
         tmp.path(),
         &args.iter().map(String::as_str).collect::<Vec<_>>(),
         &[],
     );
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(csv_rows(&merged.join("runs.csv")).len(), 6);
-    let o = radlab(
+    let o = radlab_with_env(
         tmp.path(),
         &["run", cfg.to_str().expect("utf8"), "--shard", "3/3"],
         &[],
@@ -294,7 +280,7 @@ fn run_isolated(
         .replace("time_limit = 20", &format!("time_limit = 20\n{limits}"));
     let cfg = write_config(dir, &format!("{name}.toml"), &body);
     let out = dir.join(name);
-    let o = radlab(
+    let o = radlab_with_env(
         dir,
         &[
             "run",
@@ -380,7 +366,7 @@ fn config_errors_name_the_key() {
     ];
     for (body, needle) in cases {
         let cfg = write_config(tmp.path(), "bad.toml", &body);
-        let o = radlab(tmp.path(), &["run", cfg.to_str().expect("utf8")], &[]);
+        let o = radlab_with_env(tmp.path(), &["run", cfg.to_str().expect("utf8")], &[]);
         assert!(!o.status.success(), "accepted a bad config ({needle})");
         let t = text(&o);
         assert!(
@@ -389,7 +375,7 @@ fn config_errors_name_the_key() {
         );
         assert!(!t.contains("panicked"), "{t}");
     }
-    let o = radlab(tmp.path(), &["run", "missing.toml"], &[]);
+    let o = radlab_with_env(tmp.path(), &["run", "missing.toml"], &[]);
     assert!(!o.status.success() && text(&o).contains("missing.toml"));
 }
 
