@@ -194,7 +194,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
 
     /// [`Engine::pull`] with open shares: an inner node's radiosity is the mean of its children's over
     /// their open areas, Σ o_c A_c B_c / Σ o_c A_c (what it sends from its open part; the area mean where
-    /// every child is sealed), its exitance the sum of theirs.
+    /// every child is sealed), its exitance by the transport's [`Transport::pull`].
     pub(crate) fn pull_open(&self, b: &mut [Rgb], x: &mut [T::Exitance]) {
         for i in (0..self.tree.nodes.len()).rev() {
             let (first, count) = self.tree.children[i];
@@ -203,7 +203,6 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             }
             let (mut open_sum, mut open_area) = (Rgb::ZERO, 0.0);
             let (mut sum, mut area) = (Rgb::ZERO, 0.0);
-            let mut xs = T::Exitance::default();
             for c in first..first + count {
                 let c = c as usize;
                 let a = self.tree.nodes[c].area();
@@ -211,8 +210,15 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                 open_area += a * self.solve.open[c];
                 sum += a * b[c];
                 area += a;
-                xs.add_scaled(Rgb::ONE, &x[c]);
             }
+            // The exitance (what a basis keeps beyond the mean) is pulled by the transport's own relation.
+            let kids = first as usize..(first + count) as usize;
+            let (_, xs) = self.kernel.pull(
+                &self.tree.nodes[i],
+                &self.tree.nodes[kids.clone()],
+                &b[kids.clone()],
+                &x[kids],
+            );
             b[i] = if open_area > 0.0 {
                 open_sum / open_area
             } else if area > 0.0 {

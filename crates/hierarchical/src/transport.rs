@@ -288,7 +288,8 @@ pub trait Transport<N: NodeKind>: Sync {
     /// An inner node's radiosity and exitance from its children's (`children`, `b` and `x` aligned): by
     /// default the area mean Σ A_c B_c / Σ A_c (zero for no area) and the sum of the exitance. A basis with
     /// more than the mean per element pulls its coefficients by its two-scale relation. (Where some leaf is
-    /// partly sealed, [`Transport::open_share`], the engine pulls means over open areas instead.)
+    /// partly sealed, [`Transport::open_share`], the engine takes the radiosity as the mean over open areas
+    /// and the exitance from this hook.)
     fn pull(
         &self,
         parent: &N,
