@@ -19,9 +19,10 @@
 //!   with `cxy x y`, `cspec λmin λmax v…` and `cct T`. Colour conversion is [`radlab_scene::builtin`]'s
 //!   (`spectrum_rgb`): (x, y, Y) → CIE XYZ → linear sRGB (IEC 61966-2-1 primaries, D65 white); reflectance is
 //!   the ratio to the equal-energy white MGF defines reflectance against, so neutral grey (x = y = 1/3) at
-//!   `rd 0.5` is 0.5 in every channel; emission is the exitance E = M · XYZ(x, y, ε). MGF's ε is in lm/m²;
-//!   radlab takes its value as Y of the exitance in radlab's units (no luminous efficacy), so `ed 1` of neutral
-//!   colour is E = (1.2049, 0.9484, 0.9091) W/m².
+//!   `rd 0.5` is 0.5 in every channel; emission is the exitance E = M · XYZ(x, y, ε / K) W/m². MGF's ε is
+//!   photometric (lm/m²); K = [`WHITE_EFFICACY`] = 179 lm/W is the luminous efficacy of equal-energy white by
+//!   which Radiance's `mgf2rad` and RenderPark read it too, so a scene taken from the literature keeps its
+//!   absolute values across the three programs: `ed 179` of neutral colour is E = (1.2049, 0.9484, 0.9091).
 //!
 //! Not read (each reported once with its first line in [`LoadNotes::unsupported`], then ignored, as radlab's
 //! world is diffuse): specular and transmitting materials `rs`, `ts`, `td`, `ir`, two-sided `sides 2` (radlab's
@@ -49,6 +50,10 @@ use radlab_scene::builtin::spectrum_rgb::{
     blackbody_xy, reflectance_rgb_from_xyz, spectrum_xy, xyy_to_xyz, xyz_to_linear_srgb,
 };
 use radlab_scene::{Material, Scene, SceneBuilder, SceneError};
+
+/// Luminous efficacy of equal-energy white (lm/W) by which MGF's photometric emittance `ed` becomes
+/// radiometric exitance, as Radiance and RenderPark convert it.
+pub const WHITE_EFFICACY: f64 = 179.0;
 
 /// Largest distance of a tessellated circle's chords from the circle, relative to its radius.
 pub const CHORD_TOLERANCE: f64 = 0.01;
@@ -633,7 +638,7 @@ impl Reader {
         let c = m.rd_colour;
         let rho = reflectance_rgb_from_xyz(xyy_to_xyz(c.x, c.y, m.rd));
         let c = m.ed_colour;
-        let e = xyz_to_linear_srgb(xyy_to_xyz(c.x, c.y, m.ed));
+        let e = xyz_to_linear_srgb(xyy_to_xyz(c.x, c.y, m.ed / WHITE_EFFICACY));
         let name = self
             .materials
             .current

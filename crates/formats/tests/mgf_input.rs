@@ -242,8 +242,8 @@ fn colours_convert_through_cie_xy_to_linear_srgb() {
     // The same through the library functions, exactly.
     let want = builtin::reflectance_rgb_from_xyz(builtin::xyy_to_xyz(0.64, 0.33, 0.2));
     assert!((rho - want).abs().max_element() < 1e-15);
-    // ed of neutral colour: E = M · (1, 1, 1) · ed.
-    let s = load(&format!("{SQUARE}m l =\n ed 2\nf a b c d\n"));
+    // ed of neutral colour: E = M · (1, 1, 1) · ed / 179 (lm/m² to W/m² at equal-energy white's efficacy).
+    let s = load(&format!("{SQUARE}m l =\n ed 358\nf a b c d\n"));
     let e = s.materials[0].emission;
     assert!(
         (e - 2.0 * DVec3::new(1.2049, 0.9484, 0.9091))
@@ -282,7 +282,7 @@ fn colours_convert_through_cie_xy_to_linear_srgb() {
 #[test]
 fn a_furnace_in_mgf_has_uniform_materials_and_is_closed() {
     // A closed box from a prism facing in (negative length) with one material: reflectance 0.5 in every
-    // channel and emission M·(1,1,1): B = E / (1 − ρ) (solved in the runner's tests).
+    // channel and emission M·(1,1,1)/179: B = E / (1 − ρ) (solved in the runner's tests).
     let s = load(
         "m f =\n rd .5\n ed 1\nv a =\n p 0 0 0\nv b =\n p 0 1 0\nv c =\n p 1 1 0\nv d =\n p 1 0 0\nprism a b c d -1\n",
     );

@@ -24,13 +24,13 @@ fn csv_rows(bytes: &[u8]) -> (Vec<String>, Vec<Vec<String>>) {
 
 #[test]
 fn mgf_furnace_solves_to_e_over_one_minus_rho() {
-    // A closed box (a prism facing in), rd 0.8 neutral, ed 1 neutral: ρ = 0.8 in every channel,
-    // E = M·(1, 1, 1) = (1.2049, 0.9484, 0.9091), so B = 5 E.
+    // A closed box (a prism facing in), rd 0.8 neutral, ed 179 lm/m² neutral: ρ = 0.8 in every channel,
+    // E = M·(1, 1, 1) = (1.2049, 0.9484, 0.9091) W/m², so B = 5 E.
     let tmp = tempfile::tempdir().expect("tmp");
     let scene = tmp.path().join("furnace.mgf");
     std::fs::write(
         &scene,
-        "m f =\n rd .8\n ed 1\nv a =\n p 0 0 0\nv b =\n p 0 1 0\nv c =\n p 1 1 0\nv d =\n p 1 0 0\n\
+        "m f =\n rd .8\n ed 179\nv a =\n p 0 0 0\nv b =\n p 0 1 0\nv c =\n p 1 1 0\nv d =\n p 1 0 0\n\
          xf -s 2\nprism a b c d -1\nxf\n",
     )
     .expect("write");
