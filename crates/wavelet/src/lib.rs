@@ -1,0 +1,6 @@
+//! # radlab-wavelet
+//!
+//! Wavelet (higher-order Galerkin) radiosity.
+#![doc = "wip"]
+
+pub mod basis;
