@@ -17,6 +17,7 @@
 //! | `epsilon` | 0.01 | refinement threshold (dimensionless) |
 //! | `oracle` | `bekaert-willems` | `bekaert-willems`, `f`, `bf` |
 //! | `visibility` | `per-pair` | `per-pair` (a ray per pair of quadrature nodes) or `per-link` (one fraction scaling the tensor) |
+//! | `gather` | `leaf` | `leaf` (each link's tensor re-integrated at every leaf below its receiver with the link's visibility: exact form-factor sums) or `receiver` (the classic wavelet gather, pushed down by the two-scale relation) |
 //! | `quadrature` | per basis | Gauss points per side (per sub-square for flatlets): haar 2, f2/f3 1, m2 3, m3 4 |
 //! | `min_element_size` | diagonal/150 | no element is split into children shorter than this |
 //! | `schedule` | `scheduled` | as for hierarchical radiosity |
@@ -25,8 +26,10 @@
 //!
 //! ## Triangles and other non-parallelogram faces
 //! The tensor functions are orthonormal under an element's area mean only where its parameter map has a
-//! constant Jacobian: parallelograms. Triangles and general quads therefore hold their mean only (a constant
-//! element in a basis of any order); their links still carry the tensor toward parallelogram elements. An
+//! constant Jacobian: parallelograms. Quads within 5% of one ([`link_tensor::MAX_TWIST`]; the published
+//! Cornell box's floor is 0.6% off) carry the tensor too, with the Jacobian in their rule, so their mean is
+//! exact and their other functions orthonormal to O(twist). Triangles and other quads hold their mean only (a
+//! constant element in a basis of any order); their links still carry the tensor toward the others. An
 //! orthonormal basis of the same order on triangles (total degree, as RenderPark has) would give them the
 //! same order, but the quadtree's middle child is reflected, so push and pull need two relations; it is
 //! left for later. The scenes of the 1997 study are built of quads.
@@ -53,4 +56,4 @@ pub use basis::Basis;
 pub use link_tensor::Visibility;
 pub use params::{WaveletParams, WaveletReconstruction};
 pub use solver::{Engines, Run, WaveletSolver};
-pub use transport::{Coeffs, WaveletLink, WaveletOracle, WaveletTransport};
+pub use transport::{Coeffs, WaveletGather, WaveletLink, WaveletOracle, WaveletTransport};

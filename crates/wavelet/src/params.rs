@@ -11,16 +11,20 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::Basis;
 use crate::link_tensor::Visibility;
-use crate::transport::WaveletOracle;
+use crate::transport::{WaveletGather, WaveletOracle};
 
 /// How radiosity at a point is answered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum WaveletReconstruction {
-    /// The leaf's own basis functions at the point (discontinuous across elements).
+    /// The leaf's own basis functions at the point (discontinuous across elements); also accepted as
+    /// `constant`, the name other methods give their elements' own values.
     #[default]
+    #[serde(alias = "constant")]
     Basis,
-    /// Leaf means averaged at the vertices and interpolated (the survey's "Haar with smoothing").
+    /// Leaf means averaged at the vertices and interpolated (the survey's "Haar with smoothing"); also
+    /// accepted as `gouraud`.
+    #[serde(alias = "gouraud")]
     Smoothed,
     /// One more gather from every leaf with exact point-to-polygon factors and rays (charged to answering).
     FinalGather,
@@ -43,6 +47,10 @@ pub struct WaveletParams {
     /// How visibility enters a link: per-pair (one ray per pair of quadrature nodes) or per-link (one
     /// fraction of 16 jittered rays scaling the whole tensor).
     pub visibility: Visibility,
+    /// Where a link's tensor is evaluated: leaf (re-integrated at each leaf below its receiver; exact
+    /// form-factor sums, the furnace holds at any reflectance) or receiver (pushed down by the two-scale
+    /// relation; M^4 per link only).
+    pub gather: WaveletGather,
     /// Gauss points per side of each element's quadrature (per sub-square for flatlets); unset: the basis'
     /// default (haar 2, f2/f3 1 per sub-square, m2 3, m3 4). At least M for multiwavelets.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -75,6 +83,7 @@ impl Default for WaveletParams {
             epsilon: 0.01,
             oracle: WaveletOracle::BekaertWillems,
             visibility: Visibility::PerPair,
+            gather: WaveletGather::Leaf,
             quadrature: None,
             min_element_size: None,
             schedule: Schedule::Scheduled,
@@ -161,7 +170,8 @@ mod tests {
             ("quadrature", "9"),
             ("min_element_size", "-1"),
             ("oracle", "guess"),
-            ("reconstruction", "gouraud"),
+            ("reconstruction", "linear"),
+            ("gather", "link"),
         ] {
             let e = WaveletParams::from_pairs(&[(k.to_string(), v.to_string())])
                 .expect_err("rejected")

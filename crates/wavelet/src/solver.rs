@@ -76,6 +76,7 @@ fn run<'a, const K: usize>(
         params.points(),
         params.visibility,
         params.oracle,
+        params.gather,
         seed,
     );
     Ok(Run {
@@ -110,6 +111,16 @@ impl<'a> WaveletSolver<'a> {
     /// The engine of the chosen basis size, for inspection and tests.
     pub fn engines(&self) -> &Engines<'a> {
         &self.engines
+    }
+
+    /// Turns the engine's row normalisation on or off ([`Engine::normalise_closed_rows`]): for closed scenes
+    /// only, each leaf's gathered irradiance is rescaled so that its mean row sums to one.
+    pub fn normalise_closed_rows(&mut self, on: bool) {
+        match &mut self.engines {
+            Engines::K1(r) => r.engine.normalise_closed_rows(on),
+            Engines::K4(r) => r.engine.normalise_closed_rows(on),
+            Engines::K9(r) => r.engine.normalise_closed_rows(on),
+        }
     }
 
     /// (face, area, mean radiosity) per leaf, in node order.

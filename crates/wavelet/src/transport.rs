@@ -75,6 +75,23 @@ pub enum WaveletOracle {
     Bf,
 }
 
+/// Where a link's tensor is evaluated.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum WaveletGather {
+    /// At each leaf below the receiver, the tensor re-integrated over the leaf (exact point-to-polygon
+    /// factors at its nodes, the link's visibility): the mean's rows are exact form-factor sums, so the
+    /// furnace holds at any ρ. Memory M⁴ per (leaf, link above it).
+    #[default]
+    Leaf,
+    /// At the receiver, pushed to the leaves by the two-scale relation (Gortler et al. 1993): M⁴ per link
+    /// only, but where links meet a leaf at several levels its rows sum to one only up to the basis'
+    /// approximation of each link's kernel, an error magnified by 1/(1 − ρ).
+    Receiver,
+}
+
 /// A link of the wavelet transport: its source and tensor.
 #[derive(Clone, Debug)]
 pub struct WaveletLink<const K: usize> {
@@ -118,6 +135,7 @@ pub struct WaveletTransport<'a, const K: usize> {
     points: usize,
     visibility: Visibility,
     oracle: WaveletOracle,
+    gather: WaveletGather,
     seed: u64,
     two_scale: TwoScale,
 }
@@ -133,6 +151,7 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
         points: usize,
         visibility: Visibility,
         oracle: WaveletOracle,
+        gather: WaveletGather,
         seed: u64,
     ) -> Self {
         assert_eq!(K, basis.len(), "K must be the basis' M²");
@@ -142,6 +161,7 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
             points,
             visibility,
             oracle,
+            gather,
             seed,
             two_scale: TwoScale::new(basis),
         }
@@ -164,6 +184,7 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
             visibility: self.visibility,
             seed: self.seed,
             stream: link_stream(recv.key(), src.key()),
+            given: None,
         };
         let t = link_tensor(&setup, recv, &rr, src, &rs)?;
         Some(WaveletLink {
@@ -248,17 +269,36 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
     }
 
     fn gather_at(&self, _recv: &Patch, _src: &Patch) -> GatherAt {
-        GatherAt::Receiver
+        match self.gather {
+            WaveletGather::Leaf => GatherAt::Leaves,
+            WaveletGather::Receiver => GatherAt::Receiver,
+        }
     }
 
+    /// The link's own tensor at its receiver; below it, the tensor re-integrated over the target with the
+    /// link's visibility (no rays; one kernel evaluation, counted by the engine).
     fn coefficient(
         &self,
-        _target: &Patch,
-        _src: &Patch,
+        target: &Patch,
+        src: &Patch,
         link: &Self::Link,
-        _at_receiver: bool,
+        at_receiver: bool,
     ) -> Self::Coefficient {
-        link.t
+        if at_receiver {
+            return link.t;
+        }
+        let rr = ElementRule::<K>::new(target, self.basis, self.points);
+        let rs = ElementRule::<K>::new(src, self.basis, self.points);
+        let setup = TensorSetup {
+            accel: self.accel,
+            visibility: self.visibility,
+            seed: self.seed,
+            stream: 0,
+            given: Some(link.visibility as f64),
+        };
+        link_tensor(&setup, target, &rr, src, &rs)
+            .map(|t| t.t)
+            .unwrap_or([[0.0; K]; K])
     }
 
     fn emit(
@@ -354,7 +394,14 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
                 o[ch] = v;
             }
         }
-        let mean = out.0[0];
+        // The mean as the children's area mean (exact power; the same as the relation's ¼ Σ on a
+        // parallelogram, and exact on a slightly twisted quad too).
+        let area: f64 = children.iter().map(|c| c.area).sum();
+        let mean = if area > 0.0 {
+            children.iter().zip(b).map(|(c, bc)| c.area * *bc).sum::<Rgb>() / area
+        } else {
+            out.0[0]
+        };
         out.0[0] = Rgb::ZERO;
         (mean, out)
     }

@@ -9,7 +9,9 @@ use radlab_scene::{Scene, SceneBuilder};
 use radlab_testkit::material;
 use radlab_visibility::Accel;
 use radlab_wavelet::basis::composite_rule;
-use radlab_wavelet::{Basis, Visibility, WaveletLink, WaveletOracle, WaveletTransport};
+use radlab_wavelet::{
+    Basis, Visibility, WaveletGather, WaveletLink, WaveletOracle, WaveletTransport,
+};
 
 /// Two unit squares facing each other at distance `d`: face 0 at z = 0 facing +z, face 1 at z = d facing −z.
 fn parallel_squares(d: f64) -> Scene {
@@ -38,6 +40,7 @@ fn link<const K: usize>(
         points,
         Visibility::PerPair,
         WaveletOracle::BekaertWillems,
+        WaveletGather::Receiver,
         1,
     );
     t.make_link(&Patch::root(scene, recv), &Patch::root(scene, src), src as u32)
