@@ -147,10 +147,11 @@ pub fn methods() -> Vec<MethodInfo> {
              basis itself, smoothed, or by a final gather.",
             radlab_wavelet::WaveletParams,
             radlab_wavelet::WaveletSolver,
-            // M2 with the F oracle at ε = 0.02, leaves no smaller than a quarter of an input face. Links at
-            // mixed levels are gathered at their receivers and pushed through the basis, so the operator's
-            // rows are exact only where links meet leaves of one level (crates/wavelet/tests/furnace.rs);
-            // the balance stated is the one measured by this suite at these settings.
+            // M2 with the F oracle at ε = 0.02, leaves no smaller than a quarter of an input face, the
+            // default leaf gather (each link's tensor re-integrated at every leaf: exact form-factor sums, so
+            // the furnaces hold to ~1e-6). The source side sends each inner node's pulled coefficients, not
+            // its leaves weighted by what each sees (as hierarchical radiosity does), and tensors are stored in
+            // f32: this suite measured an imbalance of 3.7e-5 (2026-12-05); the bound leaves a factor ~3.
             TestSettings {
                 params: |h| {
                     table(&[
@@ -161,7 +162,7 @@ pub fn methods() -> Vec<MethodInfo> {
                     ])
                 },
                 seeds: 1,
-                balance: 1e-2,
+                balance: 1e-4,
             }
         ),
         method!(

@@ -27,7 +27,9 @@ const SQRT3: f64 = 1.732_050_807_568_877_2;
 const SQRT5: f64 = 2.236_067_977_499_79;
 
 /// The basis of an element (Gortler, Schröder, Cohen & Hanrahan 1993; Alpert 1993).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Basis {
     /// Constant per element (one coefficient): the Haar basis of hierarchical radiosity.
@@ -233,7 +235,11 @@ impl TwoScale {
         for (a, out) in parent.iter_mut().enumerate().take(k) {
             *out = 0.25
                 * (0..4)
-                    .map(|c| (0..k).map(|b| self.h[c][a * k + b] * children[c][b]).sum::<f64>())
+                    .map(|c| {
+                        (0..k)
+                            .map(|b| self.h[c][a * k + b] * children[c][b])
+                            .sum::<f64>()
+                    })
                     .sum::<f64>();
         }
     }
@@ -294,7 +300,10 @@ mod tests {
                         g += ws * wt * f[a] * f[a];
                     }
                 }
-                assert!((g - 1.0).abs() < 1e-13, "{basis:?} element rule: |φ_{a}|² = {g}");
+                assert!(
+                    (g - 1.0).abs() < 1e-13,
+                    "{basis:?} element rule: |φ_{a}|² = {g}"
+                );
             }
         }
     }
@@ -324,14 +333,20 @@ mod tests {
                 basis.eval(2.0 * s - cs as f64, 2.0 * t - ct as f64, &mut fc);
                 let vp: f64 = (0..k).map(|a| parent[a] * fp[a]).sum();
                 let vc: f64 = (0..k).map(|a| kids[c][a] * fc[a]).sum();
-                assert!((vp - vc).abs() < 1e-12, "{basis:?} at ({s}, {t}): {vp} vs {vc}");
+                assert!(
+                    (vp - vc).abs() < 1e-12,
+                    "{basis:?} at ({s}, {t}): {vp} vs {vc}"
+                );
             }
             let mean: f64 = kids.iter().map(|kid| kid[0]).sum::<f64>() / 4.0;
             assert!((mean - parent[0]).abs() < 1e-13);
             let mut back = vec![0.0; k];
             ts.pull([&kids[0], &kids[1], &kids[2], &kids[3]], &mut back);
             for a in 0..k {
-                assert!((back[a] - parent[a]).abs() < 1e-13, "{basis:?} pull∘push at {a}");
+                assert!(
+                    (back[a] - parent[a]).abs() < 1e-13,
+                    "{basis:?} pull∘push at {a}"
+                );
             }
         }
     }
@@ -404,7 +419,10 @@ mod tests {
     #[test]
     fn projection_error_falls_at_the_basis_order() {
         for basis in Basis::ALL {
-            let e: Vec<f64> = [8, 16, 32].iter().map(|&n| projection_error(basis, n)).collect();
+            let e: Vec<f64> = [8, 16, 32]
+                .iter()
+                .map(|&n| projection_error(basis, n))
+                .collect();
             let want = 2f64.powi(basis.order() as i32);
             for w in e.windows(2) {
                 let rate = w[0] / w[1];

@@ -61,7 +61,15 @@ impl<const K: usize> SourceFlux for Coeffs<K> {
 
 /// How a link's error is estimated.
 #[derive(
-    Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum WaveletOracle {
@@ -77,7 +85,15 @@ pub enum WaveletOracle {
 
 /// Where a link's tensor is evaluated.
 #[derive(
-    Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum WaveletGather {
@@ -201,10 +217,7 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
     fn child_index(parent: &Patch, child: &Patch) -> usize {
         let cs = (child.uv[0][0] > parent.uv[0][0]) as usize;
         let ct = (child.uv[0][1] > parent.uv[0][1]) as usize;
-        CHILD_CELLS
-            .iter()
-            .position(|&c| c == (cs, ct))
-            .unwrap_or(0)
+        CHILD_CELLS.iter().position(|&c| c == (cs, ct)).unwrap_or(0)
     }
 
     /// The coefficients of a node from its mean and exitance.
@@ -363,9 +376,8 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
         b: &[Rgb],
         x: &[Self::Exitance],
     ) -> (Rgb, Self::Exitance) {
-        let tensor = children.len() == 4
-            && holds_tensor(parent)
-            && children.iter().all(holds_tensor);
+        let tensor =
+            children.len() == 4 && holds_tensor(parent) && children.iter().all(holds_tensor);
         if !tensor {
             let mut sum = Rgb::ZERO;
             let mut area = 0.0;
@@ -398,7 +410,12 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
         // parallelogram, and exact on a slightly twisted quad too).
         let area: f64 = children.iter().map(|c| c.area).sum();
         let mean = if area > 0.0 {
-            children.iter().zip(b).map(|(c, bc)| c.area * *bc).sum::<Rgb>() / area
+            children
+                .iter()
+                .zip(b)
+                .map(|(c, bc)| c.area * *bc)
+                .sum::<Rgb>()
+                / area
         } else {
             out.0[0]
         };
@@ -406,6 +423,7 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
         (mean, out)
     }
 
+    /// Σ_α b_α φ_α(s, t) at the point's parameters on the leaf, clamped at zero.
     fn radiosity_at(&self, leaf: &Patch, b: Rgb, x: &Self::Exitance, point: DVec3) -> Rgb {
         if K == 1 || !holds_tensor(leaf) {
             return b;
@@ -415,10 +433,12 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
         let mut f = [0.0; K];
         self.basis.eval(s, t, &mut f);
         let mut v = b;
-        for a in 1..K {
-            v += f[a] * x.0[a];
+        for (fa, xa) in f.iter().zip(&x.0).skip(1) {
+            v += *fa * *xa;
         }
-        v
+        // Polynomials ring across shadow edges and contacts and can dip below zero there (Zatz 1993); a
+        // radiosity is never negative, so the point answer is clamped (the coefficients are not).
+        v.max(Rgb::ZERO)
     }
 
     fn uniform_response(&self, leaf: &Patch) -> (Rgb, Self::Exitance) {

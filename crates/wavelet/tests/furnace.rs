@@ -119,7 +119,10 @@ fn the_furnace_holds_with_links_at_mixed_levels() {
         };
         let s = solve(&scene, &accel, params.clone());
         let (coef, mean, leaves) = defects(&s, want);
-        assert!(leaves > 24 && leaves < 384, "{basis:?}: {leaves} leaves (mixed levels)");
+        assert!(
+            leaves > 24 && leaves < 384,
+            "{basis:?}: {leaves} leaves (mixed levels)"
+        );
         assert!(mean < 1e-3, "{basis:?}: mean off by {mean}");
         assert!(coef < 1e-3, "{basis:?}: non-constant coefficient {coef}");
         let mut r = WaveletSolver::new(

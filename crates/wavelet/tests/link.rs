@@ -43,8 +43,12 @@ fn link<const K: usize>(
         WaveletGather::Receiver,
         1,
     );
-    t.make_link(&Patch::root(scene, recv), &Patch::root(scene, src), src as u32)
-        .expect("a link")
+    t.make_link(
+        &Patch::root(scene, recv),
+        &Patch::root(scene, src),
+        src as u32,
+    )
+    .expect("a link")
 }
 
 /// Relative L² error over the receiver of the irradiance a uniform unit source gives through the link's β = 0
@@ -108,7 +112,11 @@ fn the_mean_coefficient_is_the_form_factor() {
         assert!(errs[2] < 1e-5, "d = {d}: {errs:?}");
         // Every basis' mean coefficient is the same receiver quadrature of the same exact factor.
         let l = link::<9>(&scene, &accel, Basis::M3, 8, 0, 1);
-        assert!((l.t[0][0] as f64 - exact).abs() < 1e-5 * exact, "d = {d}: M3 {}", l.t[0][0]);
+        assert!(
+            (l.t[0][0] as f64 - exact).abs() < 1e-5 * exact,
+            "d = {d}: M3 {}",
+            l.t[0][0]
+        );
     }
 }
 
@@ -137,10 +145,21 @@ fn a_link_reproduces_the_projection_of_the_exact_irradiance() {
         if d == 1.0 {
             assert!(d8 < 2e-6, "d = {d}: defect {d8}");
         }
-        let haar = reproduction_error(&scene, Basis::Haar, &link::<1>(&scene, &accel, Basis::Haar, 8, 0, 1));
-        let m2 = reproduction_error(&scene, Basis::M2, &link::<4>(&scene, &accel, Basis::M2, 8, 0, 1));
+        let haar = reproduction_error(
+            &scene,
+            Basis::Haar,
+            &link::<1>(&scene, &accel, Basis::Haar, 8, 0, 1),
+        );
+        let m2 = reproduction_error(
+            &scene,
+            Basis::M2,
+            &link::<4>(&scene, &accel, Basis::M2, 8, 0, 1),
+        );
         let m3 = reproduction_error(&scene, Basis::M3, &l);
-        assert!(m3 < 0.5 * m2 && m2 <= haar * (1.0 + 1e-3), "d = {d}: {haar} {m2} {m3}");
+        assert!(
+            m3 < 0.5 * m2 && m2 <= haar * (1.0 + 1e-3),
+            "d = {d}: {haar} {m2} {m3}"
+        );
         if d == 1.0 {
             assert!(m3 < 0.005, "{m3}");
         }
@@ -156,7 +175,11 @@ fn links_are_reciprocal_to_the_rule_error() {
     let (o, x, y) = (DVec3::ZERO, DVec3::X, DVec3::Y);
     b.add_polygon_points(&[o, o + x, o + x + y, o + y], m, "floor")
         .expect("quad");
-    let (p, u, v) = (dvec3(0.2, 0.1, 0.8), dvec3(1.5, 0.0, 0.4), dvec3(0.3, 0.7, 0.2));
+    let (p, u, v) = (
+        dvec3(0.2, 0.1, 0.8),
+        dvec3(1.5, 0.0, 0.4),
+        dvec3(0.3, 0.7, 0.2),
+    );
     b.add_polygon_points(&[p, p + v, p + u + v, p + u], m, "tilted")
         .expect("quad");
     let scene = b.build().expect("scene");
@@ -175,5 +198,8 @@ fn links_are_reciprocal_to_the_rule_error() {
         worst / (ar * rs.t[0][0] as f64)
     };
     let (d3, d8) = (defect(3), defect(8));
-    assert!(d8 < d3 && d8 < 1e-4, "reciprocity defects {d3} (3 points), {d8} (8 points)");
+    assert!(
+        d8 < d3 && d8 < 1e-4,
+        "reciprocity defects {d3} (3 points), {d8} (8 points)"
+    );
 }
