@@ -203,3 +203,57 @@ fn links_are_reciprocal_to_the_rule_error() {
         "reciprocity defects {d3} (3 points), {d8} (8 points)"
     );
 }
+
+/// A shadow inside one link: a blocker at half height covering x < 0.5 between parallel unit squares. Per pair
+/// of nodes, the link's reproduction of a uniform source's light rises toward the lit side (the coefficient
+/// of √3 (2s − 1) along x is positive and large); one visibility fraction per link scales the unoccluded
+/// tensor, whose coefficient along x vanishes by symmetry: the shadow is lost inside the element (the
+/// blockiness Willmott & Heckbert 1997 reported for higher orders).
+#[test]
+fn per_pair_visibility_resolves_a_shadow_inside_a_link() {
+    let mut b = SceneBuilder::new("shadow");
+    let m = material(&mut b, "m", 0.5, 1.0);
+    let (o, x, y) = (DVec3::ZERO, DVec3::X, DVec3::Y);
+    b.add_polygon_points(&[o, o + x, o + x + y, o + y], m, "floor")
+        .expect("quad");
+    let z = dvec3(0.0, 0.0, 1.0);
+    b.add_polygon_points(&[z, z + y, z + x + y, z + x], m, "ceiling")
+        .expect("quad");
+    let (p, u, v) = (
+        dvec3(-2.0, -2.0, 0.5),
+        dvec3(2.5, 0.0, 0.0),
+        dvec3(0.0, 5.0, 0.0),
+    );
+    b.add_polygon_points(&[p, p + u, p + u + v, p + v], m, "blocker")
+        .expect("quad");
+    let scene = b.build().expect("scene");
+    let accel = Accel::new(&scene);
+    let make = |visibility| {
+        WaveletTransport::<4>::new(
+            &accel,
+            Basis::M2,
+            3,
+            visibility,
+            WaveletOracle::BekaertWillems,
+            WaveletGather::Receiver,
+            1,
+        )
+        .make_link(&Patch::root(&scene, 0), &Patch::root(&scene, 1), 1)
+        .expect("a link")
+    };
+    let (pair, per_link) = (make(Visibility::PerPair), make(Visibility::PerLink));
+    // Index 2 is φ_1(s) φ_0(t): linear along x.
+    let (sx_pair, sx_link) = (pair.t[2][0] as f64, per_link.t[2][0] as f64);
+    let mean = pair.t[0][0] as f64;
+    assert!(
+        sx_pair > 0.5 * mean,
+        "per pair: slope {sx_pair}, mean {mean}"
+    );
+    assert!(
+        sx_link.abs() < 1e-6 * per_link.t[0][0] as f64,
+        "per link: slope {sx_link}"
+    );
+    // Both see part of the source.
+    assert!(per_link.visibility > 0.05 && per_link.visibility < 0.95);
+    assert!(pair.visibility > 0.05 && pair.visibility < 0.95);
+}
