@@ -1,0 +1,59 @@
+//! # radlab-wavelet
+//!
+//! Wavelet radiosity (Gortler, Schröder, Cohen & Hanrahan 1993): hierarchical radiosity with a higher-order
+//! basis per element. Radiosity on each quadtree element is B(x) = Σ_α b_α φ_α(x) with M² functions
+//! ([`basis`]: Haar, flatlets F2/F3, Alpert multiwavelets M2/M3), and a link R ← S carries the M⁴ tensor
+//! T_αβ = (1/A_R) ∫_R ∫_S φ_α(x) G(x, y) φ_β(y) dy dx of the radiosity equation's kernel
+//! G = cos θ cos θ' V / (π r²) ([`link_tensor`]), so the Galerkin system b^R = E^R + ρ_R Σ_links T b^S is
+//! solved by gather, push and pull through the basis' two-scale relations ([`transport`]) on
+//! radlab-hierarchical's engine, which refines links until an oracle's estimate is below ε (Bekaert &
+//! Willems 1996's by default).
+//!
+//! ## Parameters ([`WaveletParams`])
+//!
+//! | name | default | meaning |
+//! |---|---|---|
+//! | `basis` | `m2` | `haar`, `f2`, `f3`, `m2`, `m3` |
+//! | `epsilon` | 0.01 | refinement threshold (dimensionless) |
+//! | `oracle` | `bekaert-willems` | `bekaert-willems`, `f`, `bf` |
+//! | `visibility` | `per-pair` | `per-pair` (a ray per pair of quadrature nodes) or `per-link` (one fraction scaling the tensor) |
+//! | `gather` | `leaf` | `leaf` (each link's tensor re-integrated at every leaf below its receiver with the link's visibility: exact form-factor sums) or `receiver` (the classic wavelet gather, pushed down by the two-scale relation) |
+//! | `quadrature` | per basis | Gauss points per side (per sub-square for flatlets): haar 2, f2/f3 1, m2 3, m3 4 |
+//! | `min_element_size` | diagonal/150 | no element is split into children shorter than this |
+//! | `schedule` | `scheduled` | as for hierarchical radiosity |
+//! | `reconstruction` | `basis` | `basis` (the leaf's functions), `smoothed` (vertex-averaged means), `final-gather` |
+//! | `tolerance`, `max_steps`, `memory_budget_mib` | 1e-4, 100000, 4096 | as for hierarchical radiosity |
+//!
+//! ## Triangles and other non-parallelogram faces
+//! The tensor functions are orthonormal under an element's area mean only where its parameter map has a
+//! constant Jacobian: parallelograms. Quads within 5% of one ([`link_tensor::MAX_TWIST`]; the published
+//! Cornell box's floor is 0.6% off) carry the tensor too, with the Jacobian in their rule, so their mean is
+//! exact and their other functions orthonormal to O(twist). Triangles and other quads hold their mean only (a
+//! constant element in a basis of any order); their links still carry the tensor toward the others. An
+//! orthonormal basis of the same order on triangles (total degree, as RenderPark has) would give them the
+//! same order, but the quadtree's middle child is reflected, so push and pull need two relations; it is
+//! left for later. The scenes of the 1997 study are built of quads.
+//!
+//! ## Cost
+//! A link costs n_R n_S kernel evaluations and, with per-pair visibility, as many rays (n² nodes per element:
+//! 16 for Haar and F2, 81 for M2 and F3, 256 for M3 at the default quadrature), plus an exact
+//! point-to-polygon factor per receiver node; the engine counts each link once as a kernel evaluation, as it
+//! does for hierarchical radiosity, and every ray through the accelerator. It holds M⁴ numbers (f32) per link
+//! twice (the link and the engine's gather row) and M² per element and channel for radiosity, exitance and
+//! irradiance.
+//!
+//! ## Not done
+//! Light leaks at contacts are not corrected (no open shares, unlike hierarchical radiosity); linkless
+//! shooting (Stamminger et al. 1998) is not implemented.
+
+pub mod basis;
+pub mod link_tensor;
+mod params;
+mod solver;
+pub mod transport;
+
+pub use basis::Basis;
+pub use link_tensor::Visibility;
+pub use params::{WaveletParams, WaveletReconstruction};
+pub use solver::{Engines, Run, WaveletSolver};
+pub use transport::{Coeffs, WaveletGather, WaveletLink, WaveletOracle, WaveletTransport};

@@ -1,0 +1,451 @@
+//! The wavelet transport on radlab-hierarchical's engine (Gortler, Schröder, Cohen & Hanrahan 1993): quadtree
+//! elements of the input faces carry M² coefficients per channel, links the M⁴ tensor of
+//! [`crate::link_tensor`], and one pass of the engine is
+//!
+//!   h^R_α += Σ_β T_αβ b^S_β                 (gather, at each link's receiver),
+//!   h^c_β += Σ_α H^c_αβ h^p_α               (push: the parent's irradiance restricted to child c),
+//!   b_α = E δ_α0 + ρ h_α                    (reflect, at each leaf),
+//!   b^p_α = ¼ Σ_c Σ_β H^c_αβ b^c_β          (pull: the children's radiosity projected on the parent),
+//!
+//! with H the basis' two-scale relation ([`crate::basis::TwoScale`]). The engine keeps b_0, the mean, as each
+//! node's radiosity; the transport's exitance holds the rest (index 0 unused). Elements that are not
+//! parallelograms (triangles, general quads) hold their mean only ([`crate::link_tensor::holds_tensor`]).
+//!
+//! Refinement reads [`WaveletOracle`]: Bekaert & Willems 1996's estimate from the link's residuals at the
+//! receiver nodes, ρ_R max_channel Σ_β |b^S_β| e_β / B̄ (B̄ the scene's mean radiosity, so ε is
+//! dimensionless), or HSA91's F and BF on the link's form factors.
+
+use glam::DVec3;
+use radlab_hierarchical::{
+    GatherAt, LinearState, LinkError, LinkPayload, NodeKind, NodeView, Oracle, Patch, SourceFlux,
+    SourceLight, Transport, link_stream,
+};
+use radlab_scene::Rgb;
+use radlab_visibility::Accel;
+
+use crate::basis::{Basis, CHILD_CELLS, TwoScale};
+use crate::link_tensor::{ElementRule, TensorSetup, Visibility, holds_tensor, link_tensor};
+
+/// K coefficients per channel: irradiance, radiosity flux or (index 0 unused) exitance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coeffs<const K: usize>(pub [Rgb; K]);
+
+impl<const K: usize> Default for Coeffs<K> {
+    fn default() -> Self {
+        Self([Rgb::ZERO; K])
+    }
+}
+
+impl<const K: usize> LinearState for Coeffs<K> {
+    fn add_scaled(&mut self, c: Rgb, x: &Self) {
+        for (a, b) in self.0.iter_mut().zip(&x.0) {
+            *a += c * *b;
+        }
+    }
+}
+
+/// A source of uniform radiosity B sends (B, 0, …).
+impl<const K: usize> From<Rgb> for Coeffs<K> {
+    fn from(b: Rgb) -> Self {
+        let mut c = Self::default();
+        c.0[0] = b;
+        c
+    }
+}
+
+impl<const K: usize> SourceFlux for Coeffs<K> {
+    fn scaled(self, s: f64) -> Self {
+        Self(self.0.map(|x| x * s))
+    }
+}
+
+/// How a link's error is estimated.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum WaveletOracle {
+    /// Bekaert & Willems 1996: the link's reproduction at the receiver's quadrature nodes against the
+    /// point-to-element kernel, weighted by the source's coefficients and ρ_R, over the mean radiosity.
+    #[default]
+    BekaertWillems,
+    /// Form factor max(F_RS, F_SR) (Hanrahan, Salzman & Aupperle 1991): geometry only.
+    F,
+    /// ρ_R B_S max(F_RS, F_SR) / B̄ (Hanrahan, Salzman & Aupperle 1991).
+    Bf,
+}
+
+/// Where a link's tensor is evaluated.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum WaveletGather {
+    /// At each leaf below the receiver, the tensor re-integrated over the leaf (exact point-to-polygon
+    /// factors at its nodes, the link's visibility): the mean's rows are exact form-factor sums, so the
+    /// furnace holds at any ρ. Memory M⁴ per (leaf, link above it).
+    #[default]
+    Leaf,
+    /// At the receiver, pushed to the leaves by the two-scale relation (Gortler et al. 1993): M⁴ per link
+    /// only, but where links meet a leaf at several levels its rows sum to one only up to the basis'
+    /// approximation of each link's kernel, an error magnified by 1/(1 − ρ).
+    Receiver,
+}
+
+/// A link of the wavelet transport: its source and tensor.
+#[derive(Clone, Debug)]
+pub struct WaveletLink<const K: usize> {
+    /// Source node id.
+    pub source: u32,
+    /// T_αβ, receiver α per unit source coefficient β ([`crate::link_tensor`]).
+    pub t: [[f32; K]; K],
+    /// Bekaert & Willems residual per source function.
+    pub residual: [f32; K],
+    /// Unoccluded F_RS.
+    pub f_recv: f32,
+    /// Unoccluded F_SR = F_RS A_R / A_S.
+    pub f_src: f32,
+    /// The link's visibility (per-link fraction or the kernel-weighted share of per-pair rays).
+    pub visibility: f32,
+}
+
+impl<const K: usize> LinkPayload for WaveletLink<K> {
+    fn source(&self) -> u32 {
+        self.source
+    }
+
+    /// The form-factor oracles (the engine's default reading; the transport's own is
+    /// [`Transport::link_error`]).
+    fn error(&self, oracle: Oracle, weight: f64) -> LinkError {
+        let f = self.f_recv.max(self.f_src) as f64;
+        let m = self.f_recv.min(self.f_src) as f64;
+        let w = if oracle == Oracle::F { 1.0 } else { weight };
+        LinkError {
+            estimate: f * w,
+            each_end: Some(m * w),
+        }
+    }
+}
+
+/// The wavelet transport: M² coefficients per element, M⁴ per link (K = M²).
+#[derive(Debug)]
+pub struct WaveletTransport<'a, const K: usize> {
+    accel: &'a Accel,
+    basis: Basis,
+    points: usize,
+    visibility: Visibility,
+    oracle: WaveletOracle,
+    gather: WaveletGather,
+    seed: u64,
+    two_scale: TwoScale,
+}
+
+impl<'a, const K: usize> WaveletTransport<'a, K> {
+    /// A transport in `basis` (whose M² must be K) with `points` Gauss points per cell and side.
+    ///
+    /// # Panics
+    /// If K is not `basis.len()` (a programming error of the caller, which picks K from the basis).
+    pub fn new(
+        accel: &'a Accel,
+        basis: Basis,
+        points: usize,
+        visibility: Visibility,
+        oracle: WaveletOracle,
+        gather: WaveletGather,
+        seed: u64,
+    ) -> Self {
+        assert_eq!(K, basis.len(), "K must be the basis' M²");
+        Self {
+            accel,
+            basis,
+            points,
+            visibility,
+            oracle,
+            gather,
+            seed,
+            two_scale: TwoScale::new(basis),
+        }
+    }
+
+    /// The basis.
+    pub fn basis(&self) -> Basis {
+        self.basis
+    }
+
+    /// The link `recv ← src` (None when nothing is transferred): its tensor by [`link_tensor`].
+    pub fn make_link(&self, recv: &Patch, src: &Patch, src_id: u32) -> Option<WaveletLink<K>> {
+        if recv.face == src.face {
+            return None;
+        }
+        let rr = ElementRule::<K>::new(recv, self.basis, self.points);
+        let rs = ElementRule::<K>::new(src, self.basis, self.points);
+        let setup = TensorSetup {
+            accel: self.accel,
+            visibility: self.visibility,
+            seed: self.seed,
+            stream: link_stream(recv.key(), src.key()),
+            given: None,
+        };
+        let t = link_tensor(&setup, recv, &rr, src, &rs)?;
+        Some(WaveletLink {
+            source: src_id,
+            t: t.t,
+            residual: t.residual,
+            f_recv: t.f_rs as f32,
+            f_src: (t.f_rs * recv.area / src.area) as f32,
+            visibility: t.visibility as f32,
+        })
+    }
+
+    /// The quadtree child index (0..4, [`CHILD_CELLS`]) of `child` in `parent`, from their lattice corners.
+    fn child_index(parent: &Patch, child: &Patch) -> usize {
+        let cs = (child.uv[0][0] > parent.uv[0][0]) as usize;
+        let ct = (child.uv[0][1] > parent.uv[0][1]) as usize;
+        CHILD_CELLS.iter().position(|&c| c == (cs, ct)).unwrap_or(0)
+    }
+
+    /// The coefficients of a node from its mean and exitance.
+    fn full(b: Rgb, x: &Coeffs<K>) -> Coeffs<K> {
+        let mut c = *x;
+        c.0[0] = b;
+        c
+    }
+}
+
+/// Per channel, the K coefficients as numbers.
+fn channel<const K: usize>(c: &Coeffs<K>, ch: usize) -> [f64; K] {
+    c.0.map(|x| x[ch])
+}
+
+impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
+    type Irradiance = Coeffs<K>;
+    type Exitance = Coeffs<K>;
+    type Coefficient = [[f32; K]; K];
+    type Link = WaveletLink<K>;
+    type Flux = Coeffs<K>;
+
+    fn may_interact(&self, recv: &Patch, src: &Patch) -> bool {
+        radlab_hierarchical::PatchKernel::patches_interact(recv, src)
+    }
+
+    fn link(&self, recv: &Patch, _recv_id: u32, src: &Patch, src_id: u32) -> Option<Self::Link> {
+        self.make_link(recv, src, src_id)
+    }
+
+    fn link_error(
+        &self,
+        recv: &Patch,
+        _src: &Patch,
+        link: &Self::Link,
+        light: &SourceLight<'_, Self::Exitance>,
+    ) -> LinkError {
+        match self.oracle {
+            WaveletOracle::F => link.error(Oracle::F, 1.0),
+            WaveletOracle::Bf => link.error(Oracle::Bf, light.weight),
+            WaveletOracle::BekaertWillems => {
+                if !(light.scale > 0.0) {
+                    return LinkError {
+                        estimate: 0.0,
+                        each_end: None,
+                    };
+                }
+                let b = Self::full(light.radiosity, light.exitance);
+                let mut worst: f64 = 0.0;
+                for ch in 0..3 {
+                    let s: f64 = (0..K)
+                        .map(|j| b.0[j][ch].abs() * link.residual[j] as f64)
+                        .sum();
+                    worst = worst.max(recv.reflectance[ch] * s);
+                }
+                LinkError {
+                    estimate: worst / light.scale,
+                    each_end: None,
+                }
+            }
+        }
+    }
+
+    fn gather_at(&self, _recv: &Patch, _src: &Patch) -> GatherAt {
+        match self.gather {
+            WaveletGather::Leaf => GatherAt::Leaves,
+            WaveletGather::Receiver => GatherAt::Receiver,
+        }
+    }
+
+    /// The link's own tensor at its receiver; below it, the tensor re-integrated over the target with the
+    /// link's visibility (no rays; one kernel evaluation, counted by the engine).
+    fn coefficient(
+        &self,
+        target: &Patch,
+        src: &Patch,
+        link: &Self::Link,
+        at_receiver: bool,
+    ) -> Self::Coefficient {
+        if at_receiver {
+            return link.t;
+        }
+        let rr = ElementRule::<K>::new(target, self.basis, self.points);
+        let rs = ElementRule::<K>::new(src, self.basis, self.points);
+        let setup = TensorSetup {
+            accel: self.accel,
+            visibility: self.visibility,
+            seed: self.seed,
+            stream: 0,
+            given: Some(link.visibility as f64),
+        };
+        link_tensor(&setup, target, &rr, src, &rs)
+            .map(|t| t.t)
+            .unwrap_or([[0.0; K]; K])
+    }
+
+    fn emit(
+        &self,
+        _view: &NodeView<'_, Patch>,
+        b: &[Rgb],
+        x: &[Self::Exitance],
+        _recv: u32,
+        link: &Self::Link,
+    ) -> Self::Flux {
+        let s = link.source as usize;
+        Self::full(b[s], &x[s])
+    }
+
+    fn deliver(&self, h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Self::Flux) {
+        for (a, ha) in h.0.iter_mut().enumerate() {
+            for (b, fb) in flux.0.iter().enumerate() {
+                *ha += c[a][b] as f64 * *fb;
+            }
+        }
+    }
+
+    fn push(&self, parent: &Patch, child: &Patch, h: &Self::Irradiance) -> Self::Irradiance {
+        if !(holds_tensor(parent) && holds_tensor(child)) {
+            return Coeffs::from(h.0[0]);
+        }
+        let c = Self::child_index(parent, child);
+        let mut out = Coeffs::<K>::default();
+        for ch in 0..3 {
+            let p = channel(h, ch);
+            let mut q = [0.0; K];
+            self.two_scale.push(c, &p, &mut q);
+            for (o, v) in out.0.iter_mut().zip(q) {
+                o[ch] = v;
+            }
+        }
+        out
+    }
+
+    fn reflect(
+        &self,
+        leaf: &Patch,
+        h: &Self::Irradiance,
+        with_emission: bool,
+    ) -> (Rgb, Self::Exitance) {
+        let e = if with_emission {
+            leaf.emission
+        } else {
+            Rgb::ZERO
+        };
+        let mut x = Coeffs::<K>::default();
+        for a in 1..K {
+            x.0[a] = leaf.reflectance * h.0[a];
+        }
+        (e + leaf.reflectance * h.0[0], x)
+    }
+
+    fn pull(
+        &self,
+        parent: &Patch,
+        children: &[Patch],
+        b: &[Rgb],
+        x: &[Self::Exitance],
+    ) -> (Rgb, Self::Exitance) {
+        let tensor =
+            children.len() == 4 && holds_tensor(parent) && children.iter().all(holds_tensor);
+        if !tensor {
+            let mut sum = Rgb::ZERO;
+            let mut area = 0.0;
+            for (c, bc) in children.iter().zip(b) {
+                sum += c.area * *bc;
+                area += c.area;
+            }
+            let mean = if area > 0.0 { sum / area } else { Rgb::ZERO };
+            return (mean, Coeffs::default());
+        }
+        // Children in quadtree order, whatever order the engine holds them in.
+        let mut kids = [[[0.0; K]; 4]; 3];
+        for (i, c) in children.iter().enumerate() {
+            let q = Self::child_index(parent, c);
+            let full = Self::full(b[i], &x[i]);
+            for (ch, kid) in kids.iter_mut().enumerate() {
+                kid[q] = channel(&full, ch);
+            }
+        }
+        let mut out = Coeffs::<K>::default();
+        for (ch, kid) in kids.iter().enumerate() {
+            let mut p = [0.0; K];
+            self.two_scale
+                .pull([&kid[0], &kid[1], &kid[2], &kid[3]], &mut p);
+            for (o, v) in out.0.iter_mut().zip(p) {
+                o[ch] = v;
+            }
+        }
+        // The mean as the children's area mean (exact power; the same as the relation's ¼ Σ on a
+        // parallelogram, and exact on a slightly twisted quad too).
+        let area: f64 = children.iter().map(|c| c.area).sum();
+        let mean = if area > 0.0 {
+            children
+                .iter()
+                .zip(b)
+                .map(|(c, bc)| c.area * *bc)
+                .sum::<Rgb>()
+                / area
+        } else {
+            out.0[0]
+        };
+        out.0[0] = Rgb::ZERO;
+        (mean, out)
+    }
+
+    /// Σ_α b_α φ_α(s, t) at the point's parameters on the leaf, clamped at zero.
+    fn radiosity_at(&self, leaf: &Patch, b: Rgb, x: &Self::Exitance, point: DVec3) -> Rgb {
+        if K == 1 || !holds_tensor(leaf) {
+            return b;
+        }
+        let st = leaf.polygon.param_coords(point);
+        let (s, t) = (st.x.clamp(0.0, 1.0), st.y.clamp(0.0, 1.0));
+        let mut f = [0.0; K];
+        self.basis.eval(s, t, &mut f);
+        let mut v = b;
+        for (fa, xa) in f.iter().zip(&x.0).skip(1) {
+            v += *fa * *xa;
+        }
+        // Polynomials ring across shadow edges and contacts and can dip below zero there (Zatz 1993); a
+        // radiosity is never negative, so the point answer is clamped (the coefficients are not).
+        v.max(Rgb::ZERO)
+    }
+
+    fn uniform_response(&self, leaf: &Patch) -> (Rgb, Self::Exitance) {
+        (leaf.reflectance, Coeffs::default())
+    }
+
+    fn unit_response(&self, _leaf: &Patch) -> Option<(Rgb, Self::Exitance)> {
+        Some((Rgb::ONE, Coeffs::default()))
+    }
+}
