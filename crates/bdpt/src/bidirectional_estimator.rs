@@ -11,12 +11,12 @@
 //! y_0 … (y_0 on an emitter chosen by power, area density p_A; cosine-weighted directions) and an **eye
 //! subpath** z_0 = x, z_1, … (cosine-weighted directions), both ended by Russian roulette (continue with
 //! probability max_c ρ_c, Arvo & Kirk 1990), and joins every prefix pair (s light, t eye vertices,
-//! k = s + t − 1 ≤ `max_depth`):
+//! k = s + t − 1 ≤ `max_depth`, s ≤ `max_light`):
 //!
 //! - s = 0, t ≥ 2: the eye subpath reaches an emitter, α_E(z_{t−1}) E/π;
 //! - s = 1: a fresh emitter sample y (next-event estimation), α_E(z_{t−1}) f(z_{t−1}) E(y)/π G(y, z_{t−1})/p_A;
 //! - s ≥ 2: α_L(y_{s−1}) ρ(y_{s−1})/π G(y_{s−1}, z_{t−1}) f(z_{t−1}) α_E(z_{t−1}), one shadow ray;
-//! - t = 0 is impossible at a point (mis_weight.rs) and never formed.
+//! - t = 0 is impossible at a point (mis_weight.rs) and never formed; s > `max_light` is not used.
 //!
 //! Here α are the subpath throughputs (α_L(y_1) = E/p_A, α_E(z_1) = π ρ(x), each later vertex × ρ/q) and
 //! f(z_0) = ρ(x), f(z_j) = ρ(z_j)/π. Each connection is weighted by mis_weight.rs (balance or power
@@ -88,20 +88,32 @@ pub struct BidirectionalEstimator<'a> {
     accel: &'a Accel,
     emitters: EmitterSampler,
     max_depth: u32,
+    max_light: u32,
     heuristic: Heuristic,
 }
 
 impl<'a> BidirectionalEstimator<'a> {
-    /// The estimator for `scene` through `accel`: paths of at most `max_depth` segments, strategies weighted
-    /// by `heuristic`.
-    pub fn new(scene: &'a Scene, accel: &'a Accel, max_depth: u32, heuristic: Heuristic) -> Self {
+    /// The estimator for `scene` through `accel`: paths of at most `max_depth` segments, light subpaths of at
+    /// most `max_light` vertices, strategies weighted by `heuristic`.
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        max_depth: u32,
+        max_light: u32,
+        heuristic: Heuristic,
+    ) -> Self {
         Self {
             scene,
             accel,
             emitters: EmitterSampler::new(scene),
             max_depth,
+            max_light,
             heuristic,
         }
+    }
+
+    fn weight(&self, light: &[Densities], eye: &[Densities]) -> f64 {
+        mis_weight(light, eye, self.heuristic, self.max_light as usize)
     }
 
     /// One unbiased sample of the radiosity leaving `p` (its face's emission plus the reflected part).
@@ -174,7 +186,8 @@ impl<'a> BidirectionalEstimator<'a> {
         }
     }
 
-    /// y_0 on an emitter (by power), then a cosine-weighted walk: at most `max_depth` vertices.
+    /// y_0 on an emitter (by power), then a cosine-weighted walk: at most min(`max_depth`, `max_light`)
+    /// vertices.
     fn light_subpath(&self, rng: &mut Rng) -> Subpath {
         let mut path = Subpath::default();
         let (u0, u1, u2) = (
@@ -195,7 +208,8 @@ impl<'a> BidirectionalEstimator<'a> {
         };
         path.push(y0, ls.pdf_area);
         // α(y_1) = α(y_0) · (E/π) · cos / (cos/π) = E / p_A.
-        self.random_walk(&mut path, e / ls.pdf_area, self.max_depth as usize, rng);
+        let max_len = self.max_depth.min(self.max_light) as usize;
+        self.random_walk(&mut path, e / ls.pdf_area, max_len, rng);
         path
     }
 
@@ -229,7 +243,7 @@ impl<'a> BidirectionalEstimator<'a> {
         }
         let mut pdf = eye.pdf[..t].to_vec();
         pdf[t - 1].rev = self.emitters.pdf_area(z.face);
-        z.alpha * e * INV_PI * mis_weight(&[], &pdf, self.heuristic)
+        z.alpha * e * INV_PI * self.weight(&[], &pdf)
     }
 
     /// s = 1: a fresh emitter sample joined to the eye subpath's vertex t − 1 (one shadow ray).
@@ -288,6 +302,6 @@ impl<'a> BidirectionalEstimator<'a> {
         }
         ep[t - 1].rev = cosine_area_pdf(y, z);
         let g = cos_y * cos_z / r2;
-        unweighted * (g * mis_weight(&lp, &ep, self.heuristic))
+        unweighted * (g * self.weight(&lp, &ep))
     }
 }

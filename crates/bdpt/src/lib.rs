@@ -19,10 +19,11 @@
 //! | `samples` | 256 | samples per point; standard error ∝ 1/√samples |
 //! | `initial_samples` | 16 | samples added by the first step; each later step doubles them |
 //! | `max_depth` | 100000 | cap on path segments (a safety net; bias ≤ ρ_max^max_depth) |
+//! | `max_light_vertices` | 4 | cap on light subpath vertices; strategies with more are not used (1: path tracing with MIS) |
 //! | `heuristic` | `power` | `balance` (w = p/Σp) or `power` (w = p²/Σp²) |
 //!
-//! **Cost**: a light subpath of about 1/(1 − ρ̄) rays, an eye subpath of as many, and one shadow ray per
-//! joined pair, about s̄·t̄ ≈ 1/(1 − ρ̄)²: more rays per sample than the path tracer (about 2/(1 − ρ̄)),
+//! **Cost**: a light subpath of about min(1/(1 − ρ̄), `max_light_vertices`) rays, an eye subpath of
+//! 1/(1 − ρ̄), and one shadow ray per joined pair, about s̄·t̄: more rays per sample than the path tracer (about 2/(1 − ρ̄)),
 //! which pays only where light arrives indirectly (through a doorway, from behind a partition: light
 //! subpaths carry it to the lit surfaces the eye subpaths find). **Does badly**: bright enclosures (ρ → 1)
 //! make the s·t connections dominate; point queries do not share light subpaths, so nothing is amortized

@@ -16,6 +16,11 @@
 //! of the k + 1 remaining strategies sum to 1 for each path, as unbiasedness needs. Russian roulette
 //! probabilities are not part of the densities (they scale every strategy's estimate, not its weight's
 //! validity: any weights summing to 1 over the strategies that can make a path keep the sum unbiased).
+//!
+//! **Strategies not used.** Light subpaths are cut at `max_light` vertices (bright enclosures would
+//! otherwise cost s·t shadow rays per sample with s, t ~ 1/(1 − ρ)); strategies with s > `max_light` are
+//! then never formed and take no share: the sums run over s = 0 … min(k, `max_light`). The strategies
+//! s = 0 and s = 1 make every path, so each path keeps weights summing to 1.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -53,8 +58,15 @@ pub struct Densities {
 }
 
 /// The weight of the strategy that joined light vertices `light` = y_0 … y_{s−1} to eye vertices
-/// `eye` = z_0 … z_{t−1} (z_0 the query point), given their densities. Zero for t = 0 (impossible at a point).
-pub fn mis_weight(light: &[Densities], eye: &[Densities], heuristic: Heuristic) -> f64 {
+/// `eye` = z_0 … z_{t−1} (z_0 the query point), given their densities, among the strategies with at most
+/// `max_light` light vertices (the others are not used, so they take no share). Zero for t = 0 (impossible at
+/// a point).
+pub fn mis_weight(
+    light: &[Densities],
+    eye: &[Densities],
+    heuristic: Heuristic,
+    max_light: usize,
+) -> f64 {
     if eye.is_empty() {
         return 0.0;
     }
@@ -64,8 +76,10 @@ pub fn mis_weight(light: &[Densities], eye: &[Densities], heuristic: Heuristic) 
     };
     let mut sum = 0.0;
     let mut r = 1.0;
-    // Strategies with more light vertices: v_{s}, v_{s+1}, … taken by the light side, up to v_{k−1} (z_1).
-    for d in eye[1..].iter().rev() {
+    // Strategies with more light vertices: v_{s}, v_{s+1}, … taken by the light side, up to v_{k−1} (z_1),
+    // while they have at most `max_light` light vertices.
+    let more = max_light.saturating_sub(light.len());
+    for d in eye[1..].iter().rev().take(more) {
         r *= ratio(d);
         sum += r;
     }
@@ -118,18 +132,25 @@ mod tests {
         for k in 1..=8 {
             for _ in 0..50 {
                 let (pl, pe) = path(k, &mut rng);
-                // p_s by its definition; t = 0 (s = k + 1) left out.
+                // p_s by its definition; t = 0 (s = k + 1) left out, and s > max_light when light subpaths are
+                // cut.
                 let p: Vec<f64> = (0..=k)
                     .map(|s| pl[..s].iter().product::<f64>() * pe[s..].iter().product::<f64>())
                     .collect();
-                for h in [Heuristic::Balance, Heuristic::Power] {
+                for (h, max_light) in [
+                    (Heuristic::Balance, k),
+                    (Heuristic::Power, k),
+                    (Heuristic::Balance, 2),
+                    (Heuristic::Power, 1),
+                ] {
                     let beta = if h == Heuristic::Power { 2 } else { 1 };
-                    let total: f64 = p.iter().map(|q| q.powi(beta)).sum();
+                    let used = max_light.min(k);
+                    let total: f64 = p[..=used].iter().map(|q| q.powi(beta)).sum();
                     let mut sum = 0.0;
-                    for s in 0..=k {
+                    for (s, p_s) in p[..=used].iter().enumerate() {
                         let (light, eye) = split(&pl, &pe, s);
-                        let w = mis_weight(&light, &eye, h);
-                        let want = p[s].powi(beta) / total;
+                        let w = mis_weight(&light, &eye, h, max_light);
+                        let want = p_s.powi(beta) / total;
                         assert!(
                             (w - want).abs() <= 1e-9 * want + 1e-15,
                             "k {k} s {s} {h:?}: {w} vs {want}"
@@ -148,6 +169,6 @@ mod tests {
     #[test]
     fn a_light_path_ending_at_the_query_point_has_weight_zero() {
         let light = [Densities { fwd: 1.0, rev: 1.0 }; 3];
-        assert_eq!(mis_weight(&light, &[], Heuristic::Balance), 0.0);
+        assert_eq!(mis_weight(&light, &[], Heuristic::Balance, 8), 0.0);
     }
 }

@@ -25,6 +25,11 @@ pub struct BdptParams {
     /// guards against runaway paths (bias at most ρ_max^max_depth, relative).
     #[schemars(range(min = 1))]
     pub max_depth: u32,
+    /// Cap on a light subpath's vertices (1: no light subpaths beyond next-event estimation, i.e. path tracing
+    /// with MIS); strategies with more light vertices are not used and take no share of the weights. Bounds the
+    /// shadow rays per sample at about max_light_vertices × the eye subpath's length in bright enclosures.
+    #[schemars(range(min = 1))]
+    pub max_light_vertices: u32,
     /// How the strategies that could have made a path share it: balance (w = p/Σp) or power (w = p²/Σp²).
     pub heuristic: Heuristic,
 }
@@ -35,6 +40,7 @@ impl Default for BdptParams {
             samples: 256,
             initial_samples: 16,
             max_depth: DEFAULT_MAX_DEPTH,
+            max_light_vertices: 4,
             heuristic: Heuristic::Power,
         }
     }

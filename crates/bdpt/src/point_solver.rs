@@ -81,6 +81,7 @@ impl<'a> BdptSolver<'a> {
             self.scene,
             self.accel,
             self.params.max_depth,
+            self.params.max_light_vertices,
             self.params.heuristic,
         )
     }
