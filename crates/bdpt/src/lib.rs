@@ -23,11 +23,13 @@
 //! | `heuristic` | `power` | `balance` (w = p/Σp) or `power` (w = p²/Σp²) |
 //!
 //! **Cost**: a light subpath of about min(1/(1 − ρ̄), `max_light_vertices`) rays, an eye subpath of
-//! 1/(1 − ρ̄), and one shadow ray per joined pair, about s̄·t̄: more rays per sample than the path tracer (about 2/(1 − ρ̄)),
-//! which pays only where light arrives indirectly (through a doorway, from behind a partition: light
-//! subpaths carry it to the lit surfaces the eye subpaths find). **Does badly**: bright enclosures (ρ → 1)
-//! make the s·t connections dominate; point queries do not share light subpaths, so nothing is amortized
-//! over points; images are answered per pixel hit point.
+//! 1/(1 − ρ̄), and one shadow ray per joined pair (at most `max_light_vertices` + 1 per eye vertex): more
+//! rays per sample than the path tracer's 2/(1 − ρ̄), which pays only where light arrives indirectly (through
+//! a doorway, from behind a partition: light subpaths carry it to the surfaces it first lands on, which eye
+//! subpaths then find). **Does badly**: in bright enclosures (ρ → 1) the connections cost about
+//! `max_light_vertices` shadow rays per eye vertex for little gain; point queries do not share light
+//! subpaths, so nothing is amortized over points; images are answered per pixel hit point (a fresh estimate
+//! at each, through the runner's renderer).
 
 mod bidirectional_estimator;
 mod mis_weight;
