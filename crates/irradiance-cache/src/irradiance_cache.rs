@@ -31,7 +31,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
-use radlab_pathtrace::{PathEstimator, SurfacePoint};
+use radlab_pathtrace::{PathEstimator, QueryPoints, SurfacePoint, coordinate_stream};
 use radlab_scene::{
     FaceId, Rgb, Scene,
     sampling::{self, Rng, mix64},
@@ -91,8 +91,7 @@ pub struct IrradianceCacheSolver<'a> {
     params: IrradianceCacheParams,
     estimator: PathEstimator<'a>,
     seed: u64,
-    points: Vec<SurfacePoint>,
-    index: HashMap<(FaceId, [u64; 3]), usize>,
+    points: QueryPoints,
     records: Vec<Record>,
     octree: RecordOctree,
     /// Per query point, the record gathered there (or [`NO_RECORD`]).
@@ -117,16 +116,6 @@ impl std::fmt::Debug for IrradianceCacheSolver<'_> {
     }
 }
 
-fn point_key(face: FaceId, p: DVec3) -> (FaceId, [u64; 3]) {
-    (face, [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
-}
-
-/// The random stream of a point off the query set: a hash of its face and coordinates with the top bit set, so
-/// it never coincides with a query point's index.
-fn coordinate_stream(face: FaceId, p: DVec3) -> u64 {
-    mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits() ^ face as u64))) | 1 << 63
-}
-
 impl<'a> IrradianceCacheSolver<'a> {
     /// The cache for `points` (nothing gathered yet: each step is a build pass, the last one answers).
     pub fn new(
@@ -137,26 +126,7 @@ impl<'a> IrradianceCacheSolver<'a> {
         points: Vec<SurfacePoint>,
     ) -> Result<Self, SolveError> {
         params.validate()?;
-        if let Some((i, p)) = points
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.face >= scene.faces.len() || !p.point.is_finite())
-        {
-            return Err(SolveError::param(
-                "points",
-                format!(
-                    "point {i} (face {}, {:?}) is not a finite point on one of the scene's {} faces",
-                    p.face,
-                    p.point,
-                    scene.faces.len()
-                ),
-            ));
-        }
-        let index = points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (point_key(p.face, p.point), i))
-            .collect();
+        let points = QueryPoints::new(scene, points)?;
         let (lo, hi) = scene.bounds();
         let diag = scene.diagonal();
         Ok(Self {
@@ -166,7 +136,6 @@ impl<'a> IrradianceCacheSolver<'a> {
             seed,
             site: vec![NO_RECORD; points.len()],
             answers: Vec::new(),
-            index,
             points,
             records: Vec::new(),
             octree: RecordOctree::new(lo, hi),
@@ -369,8 +338,7 @@ impl<'a> IrradianceCacheSolver<'a> {
     }
 
     fn bytes(&self) -> u64 {
-        (self.points.capacity() * size_of::<SurfacePoint>()
-            + self.index.capacity() * (size_of::<(FaceId, [u64; 3])>() + 8)
+        (self.points.bytes()
             + self.records.capacity() * size_of::<Record>()
             + self.octree.bytes()
             + self.site.capacity() * 4
@@ -462,9 +430,9 @@ impl Solution for IrradianceCacheSolver<'_> {
             return Rgb::splat(f64::NAN);
         }
         let n = self.scene.faces[face].normal;
-        match self.index.get(&point_key(face, point)) {
-            Some(&i) if self.converged => self.answers[i],
-            Some(&i) => self.answer(face, point, n, self.site[i], i as u64),
+        match self.points.find(face, point) {
+            Some(i) if self.converged => self.answers[i],
+            Some(i) => self.answer(face, point, n, self.site[i], i as u64),
             None => self.answer(face, point, n, NO_RECORD, coordinate_stream(face, point)),
         }
     }

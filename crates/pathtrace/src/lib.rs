@@ -71,6 +71,10 @@
 //!   `step()`. Nothing here prints, writes files or reads the clock.
 //! - **Rays**: every ray goes through the shared [`Accel`], whose `rays_cast()` counter gives the rays of an
 //!   estimate or a render; [`McRadiositySolver`] reports its own in `stats().rays`.
+//! - **Query points**: every per-point method (this crate's, the irradiance cache, photon maps, bidirectional
+//!   path tracing) holds its points as [`QueryPoints`] (validated, indexed by exact coordinates; streams of
+//!   other points from [`coordinate_stream`]), and the stepped samplers share [`SteppedPoints`] (the doubling
+//!   schedule, streams, running statistics and counts over [`sample_points`]).
 //! - **One-sided faces**: a face emits and reflects from its front only; light reaching a back is absorbed and
 //!   a back is black, as in every radlab method (and as the point-to-polygon form factor assumes).
 
@@ -81,6 +85,7 @@ mod mesh_radiosity;
 mod path_estimator;
 mod point_estimator;
 mod point_solver;
+mod query_points;
 mod random_walk;
 mod running_stats;
 mod stochastic_jacobi;
@@ -90,10 +95,12 @@ pub use emitter_sampling::{EmitterSampler, LightSample};
 pub use mesh_radiosity::{McMethod, McRadiosityParams, McRadiositySolver};
 pub use path_estimator::{DirectSampling, PathEstimator};
 pub use point_estimator::{
-    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
-    estimate_points, estimate_points_with_progress,
+    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, PointSampler, SAMPLES_PER_CHUNK, SurfacePoint,
+    estimate_points, estimate_points_with_progress, sample_points,
 };
-pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver};
+pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver, SteppedPoints};
+pub use query_points::{QueryPoints, coordinate_hash, coordinate_stream};
+pub use running_stats::RunningStats;
 
 #[doc(no_inline)]
 pub use radlab_scene::Camera;

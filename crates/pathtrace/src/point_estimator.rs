@@ -11,7 +11,10 @@ use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 use glam::DVec3;
 use radlab_method::MethodParams;
-use radlab_scene::{FaceId, Rgb, Scene, sampling};
+use radlab_scene::{
+    FaceId, Rgb, Scene,
+    sampling::{self, Rng},
+};
 use radlab_visibility::Accel;
 use rayon::prelude::*;
 use schemars::JsonSchema;
@@ -113,10 +116,13 @@ pub fn estimate_points_with_progress(
     let remaining: Vec<AtomicU32> = points.iter().map(|_| AtomicU32::new(chunks)).collect();
     let done = AtomicUsize::new(0);
     let total = points.len();
-    sample_points(&estimator, points, params.samples, 0, seed, &|i| {
+    let chunk_done = |i: usize| {
         if remaining[i].fetch_sub(1, Ordering::AcqRel) == 1 {
             progress(done.fetch_add(1, Ordering::AcqRel) + 1, total);
         }
+    };
+    sample_points(points, params.samples, 0, seed, &chunk_done, &|p, rng| {
+        estimator.radiosity(p.face, p.point, p.normal, rng)
     })
     .iter()
     .map(|s| PointEstimate {
@@ -126,16 +132,21 @@ pub fn estimate_points_with_progress(
     .collect()
 }
 
-/// `samples` paths at every point, in chunks of [`SAMPLES_PER_CHUNK`]: chunk c of point i draws from stream
-/// (i, `first_chunk` + c) of `seed`, and a point's chunks are merged in order, so the result is the same for
-/// any number of threads. `chunk_done(i)` is called (from worker threads) as each chunk of point i finishes.
-pub(crate) fn sample_points(
-    estimator: &PathEstimator,
+/// One sample of the radiosity B leaving a surface point, drawn from the given stream: what a per-point
+/// estimator supplies to [`sample_points`].
+pub type PointSampler<'s> = dyn Fn(&SurfacePoint, &mut Rng) -> Rgb + Sync + 's;
+
+/// `samples` draws of `sample` at every point, in chunks of [`SAMPLES_PER_CHUNK`]: chunk c of point i draws
+/// from stream (i, `first_chunk` + c) of `seed`, and a point's chunks are merged in order, so the result is the
+/// same for any number of threads. `chunk_done(i)` is called (from worker threads) as each chunk of point i
+/// finishes.
+pub fn sample_points(
     points: &[SurfacePoint],
     samples: u32,
     first_chunk: u64,
     seed: u64,
     chunk_done: &(dyn Fn(usize) + Sync),
+    sample: &PointSampler,
 ) -> Vec<RunningStats> {
     let chunks = samples.div_ceil(SAMPLES_PER_CHUNK).max(1) as usize;
     let parts: Vec<RunningStats> = (0..points.len() * chunks)
@@ -148,7 +159,7 @@ pub(crate) fn sample_points(
             let mut rng = sampling::rng(seed, ((i as u64) << 32) | (first_chunk + c as u64));
             let mut stats = RunningStats::default();
             for _ in 0..count {
-                stats.push(estimator.radiosity(p.face, p.point, p.normal, &mut rng));
+                stats.push(sample(p, &mut rng));
             }
             chunk_done(i);
             stats

@@ -16,8 +16,6 @@
 //! with the same seed, and the answer is bit-identical for any number of threads. Rays are counted through the
 //! shared [`Accel`]'s counter around each step.
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{FaceId, Rgb, Scene, sampling::mix64};
@@ -27,9 +25,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::path_estimator::{DirectSampling, PathEstimator};
 use crate::point_estimator::{
-    DEFAULT_MAX_DEPTH, PointEstimate, PointParams, SAMPLES_PER_CHUNK, SurfacePoint,
-    estimate_points, sample_points,
+    DEFAULT_MAX_DEPTH, PointEstimate, PointSampler, SAMPLES_PER_CHUNK, SurfacePoint, sample_points,
 };
+use crate::query_points::{QueryPoints, coordinate_hash};
 use crate::running_stats::RunningStats;
 
 /// Mixed into the seed so the method's streams differ from the reference estimator's.
@@ -68,29 +66,22 @@ impl Default for PathTraceParams {
 
 impl MethodParams for PathTraceParams {
     fn check_combination(&self) -> Result<(), SolveError> {
-        if self.initial_samples > self.samples {
-            return Err(SolveError::param(
-                "initial_samples",
-                format!(
-                    "{} must be between 1 and samples ({})",
-                    self.initial_samples, self.samples
-                ),
-            ));
-        }
-        Ok(())
+        SteppedPoints::check_schedule(self.initial_samples, self.samples)
     }
 }
 
-/// Path tracing at a fixed set of points, advanced by doubling the paths per point.
-pub struct PathTraceSolver<'a> {
-    scene: &'a Scene,
-    accel: &'a Accel,
-    params: PathTraceParams,
-    seed: u64,
-    points: Vec<SurfacePoint>,
-    index: HashMap<(FaceId, [u64; 3]), usize>,
+/// Running estimates at a fixed set of query points, advanced by doubling the samples per point: the schedule,
+/// random streams, statistics and counts that every per-point sampler stepped as a method shares (path tracing
+/// here, bidirectional path tracing in radlab-bdpt). Step k's chunk c of point i draws from stream
+/// (i, global chunk index) of the seed given, so results do not depend on the thread count.
+#[derive(Clone, Debug)]
+pub struct SteppedPoints {
+    points: QueryPoints,
     stats: Vec<RunningStats>,
-    /// Paths per point so far.
+    seed: u64,
+    initial_samples: u32,
+    target: u32,
+    /// Samples per point so far.
     samples: u32,
     /// Chunks per point drawn so far (the next chunk's stream index).
     chunks: u64,
@@ -98,72 +89,54 @@ pub struct PathTraceSolver<'a> {
     rays: u64,
 }
 
-impl std::fmt::Debug for PathTraceSolver<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("PathTraceSolver")
-            .field("points", &self.points.len())
-            .field("samples", &self.samples)
-            .field("params", &self.params)
-            .finish()
-    }
-}
-
-fn point_key(face: FaceId, p: DVec3) -> (FaceId, [u64; 3]) {
-    (face, [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
-}
-
-impl<'a> PathTraceSolver<'a> {
-    /// Path tracing at `points` (no paths yet: the first step traces `initial_samples` per point).
-    pub fn new(
-        scene: &'a Scene,
-        accel: &'a Accel,
-        params: PathTraceParams,
-        seed: u64,
-        points: Vec<SurfacePoint>,
-    ) -> Result<Self, SolveError> {
-        params.validate()?;
-        if let Some((i, p)) = points
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.face >= scene.faces.len())
-        {
-            return Err(SolveError::param(
-                "points",
-                format!(
-                    "point {i} names face {} but the scene has {} faces",
-                    p.face,
-                    scene.faces.len()
-                ),
-            ));
-        }
-        let index = points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (point_key(p.face, p.point), i))
-            .collect();
-        Ok(Self {
-            scene,
-            accel,
-            seed: mix64(seed ^ METHOD_STREAM_TAG),
+impl SteppedPoints {
+    /// No samples yet at `points`: the first step draws `initial_samples` per point from streams of `seed`,
+    /// each later one as many as the points have, until `samples` per point.
+    pub fn new(points: QueryPoints, seed: u64, initial_samples: u32, samples: u32) -> Self {
+        Self {
             stats: vec![RunningStats::default(); points.len()],
             points,
-            index,
-            params,
+            seed,
+            initial_samples,
+            target: samples,
             samples: 0,
             chunks: 0,
             steps: 0,
             rays: 0,
-        })
+        }
     }
 
-    /// Paths per point so far.
+    /// Checks a schedule's parameters: `initial_samples` (the key named in the error) must not exceed
+    /// `samples`.
+    pub fn check_schedule(initial_samples: u32, samples: u32) -> Result<(), SolveError> {
+        if initial_samples > samples {
+            return Err(SolveError::param(
+                "initial_samples",
+                format!("{initial_samples} must be between 1 and samples ({samples})"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Samples per point so far.
     pub fn samples(&self) -> u32 {
         self.samples
     }
 
+    /// Samples for a fresh estimate off the query set: as many as the points have, at least
+    /// `initial_samples`.
+    pub fn fresh_samples(&self) -> u32 {
+        self.samples.max(self.initial_samples)
+    }
+
+    /// The seed the points' streams derive from.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
     /// The query points.
     pub fn points(&self) -> &[SurfacePoint] {
-        &self.points
+        self.points.points()
     }
 
     /// Mean and standard error at every query point, in their order.
@@ -179,51 +152,42 @@ impl<'a> PathTraceSolver<'a> {
 
     /// The estimate at a query point, if it is one.
     pub fn estimate_at(&self, face: FaceId, point: DVec3) -> Option<PointEstimate> {
-        self.index
-            .get(&point_key(face, point))
-            .map(|&i| PointEstimate {
-                mean: self.stats[i].mean(),
-                std_error: self.stats[i].std_error(),
-            })
+        self.points.find(face, point).map(|i| PointEstimate {
+            mean: self.stats[i].mean(),
+            std_error: self.stats[i].std_error(),
+        })
     }
 
-    /// Paths the next step adds per point.
+    /// Samples the next step adds per point.
     fn next_batch(&self) -> u32 {
         let want = if self.samples == 0 {
-            self.params.initial_samples
+            self.initial_samples
         } else {
             self.samples
         };
-        want.min(self.params.samples - self.samples)
+        want.min(self.target - self.samples)
     }
-}
 
-impl Solver for PathTraceSolver<'_> {
-    fn step(&mut self) -> Result<Step, SolveError> {
+    /// Adds the next batch of `sample` draws at every point, counting the rays cast through `accel`.
+    pub fn step(&mut self, accel: &Accel, sample: &PointSampler) -> Result<Step, SolveError> {
         let batch = self.next_batch();
         if batch == 0 {
             return Ok(Step::Converged);
         }
         let chunks = batch.div_ceil(SAMPLES_PER_CHUNK) as usize;
-        let estimator = PathEstimator::new(
-            self.scene,
-            self.accel,
-            self.params.max_depth,
-            self.params.direct,
-        );
-        let rays0 = self.accel.rays_cast();
+        let rays0 = accel.rays_cast();
         let batch_stats = sample_points(
-            &estimator,
-            &self.points,
+            self.points.points(),
             batch,
             self.chunks,
             self.seed,
             &|_| {},
+            sample,
         );
         for (s, b) in self.stats.iter_mut().zip(&batch_stats) {
             s.merge(b);
         }
-        self.rays += self.accel.rays_cast() - rays0;
+        self.rays += accel.rays_cast() - rays0;
         self.chunks += chunks as u64;
         self.samples += batch;
         self.steps += 1;
@@ -232,10 +196,125 @@ impl Solver for PathTraceSolver<'_> {
                 "a path produced a non-finite radiosity".into(),
             ));
         }
-        Ok(if self.samples >= self.params.samples {
+        Ok(if self.samples >= self.target {
             Step::Converged
         } else {
             Step::Continue
+        })
+    }
+
+    /// The answer at (`face`, `point`): the running mean at a query point; elsewhere the mean of
+    /// [`SteppedPoints::fresh_samples`] draws of `sample` at the point (on the face's front) from the streams of
+    /// mix64(seed ⊕ [`coordinate_hash`]), reproducible in any order; NaN on a face the scene lacks.
+    pub fn radiosity_at(
+        &self,
+        scene: &Scene,
+        face: FaceId,
+        point: DVec3,
+        sample: &PointSampler,
+    ) -> Rgb {
+        if let Some(e) = self.estimate_at(face, point) {
+            return e.mean;
+        }
+        if face >= scene.faces.len() {
+            return Rgb::splat(f64::NAN);
+        }
+        let p = [SurfacePoint {
+            face,
+            point,
+            normal: scene.faces[face].normal,
+        }];
+        let seed = mix64(self.seed ^ coordinate_hash(face, point));
+        sample_points(&p, self.fresh_samples(), 0, seed, &|_| {}, sample)[0].mean()
+    }
+
+    /// Steps, rays and bytes so far (no elements, links or form factors).
+    pub fn stats(&self) -> Stats {
+        Stats {
+            steps: self.steps,
+            elements: 0,
+            links: 0,
+            form_factors: 0,
+            rays: self.rays,
+            bytes: (self.points.bytes() + self.stats.capacity() * size_of::<RunningStats>()) as u64,
+            residual: None,
+        }
+    }
+}
+
+/// Path tracing at a fixed set of points, advanced by doubling the paths per point.
+pub struct PathTraceSolver<'a> {
+    scene: &'a Scene,
+    accel: &'a Accel,
+    params: PathTraceParams,
+    runs: SteppedPoints,
+}
+
+impl std::fmt::Debug for PathTraceSolver<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PathTraceSolver")
+            .field("points", &self.runs.points().len())
+            .field("samples", &self.runs.samples())
+            .field("params", &self.params)
+            .finish()
+    }
+}
+
+impl<'a> PathTraceSolver<'a> {
+    /// Path tracing at `points` (no paths yet: the first step traces `initial_samples` per point).
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel,
+        params: PathTraceParams,
+        seed: u64,
+        points: Vec<SurfacePoint>,
+    ) -> Result<Self, SolveError> {
+        params.validate()?;
+        let runs = SteppedPoints::new(
+            QueryPoints::new(scene, points)?,
+            mix64(seed ^ METHOD_STREAM_TAG),
+            params.initial_samples,
+            params.samples,
+        );
+        Ok(Self {
+            scene,
+            accel,
+            params,
+            runs,
+        })
+    }
+
+    /// Paths per point so far.
+    pub fn samples(&self) -> u32 {
+        self.runs.samples()
+    }
+
+    /// The query points.
+    pub fn points(&self) -> &[SurfacePoint] {
+        self.runs.points()
+    }
+
+    /// Mean and standard error at every query point, in their order.
+    pub fn estimates(&self) -> Vec<PointEstimate> {
+        self.runs.estimates()
+    }
+
+    /// The estimate at a query point, if it is one.
+    pub fn estimate_at(&self, face: FaceId, point: DVec3) -> Option<PointEstimate> {
+        self.runs.estimate_at(face, point)
+    }
+}
+
+impl Solver for PathTraceSolver<'_> {
+    fn step(&mut self) -> Result<Step, SolveError> {
+        let estimator = PathEstimator::new(
+            self.scene,
+            self.accel,
+            self.params.max_depth,
+            self.params.direct,
+        );
+        self.runs.step(self.accel, &|p, rng| {
+            estimator.radiosity(p.face, p.point, p.normal, rng)
         })
     }
 
@@ -244,18 +323,7 @@ impl Solver for PathTraceSolver<'_> {
     }
 
     fn stats(&self) -> Stats {
-        Stats {
-            steps: self.steps,
-            elements: 0,
-            links: 0,
-            form_factors: 0,
-            rays: self.rays,
-            bytes: (self.points.capacity() * size_of::<SurfacePoint>()
-                + self.stats.capacity() * size_of::<RunningStats>()
-                + self.index.capacity() * (size_of::<(FaceId, [u64; 3])>() + 8))
-                as u64,
-            residual: None,
-        }
+        self.runs.stats()
     }
 }
 
@@ -263,25 +331,14 @@ impl Solution for PathTraceSolver<'_> {
     /// The running mean at a query point; elsewhere a fresh estimate with the paths per point so far (at least
     /// `initial_samples`), from a stream keyed by the point.
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        if let Some(e) = self.estimate_at(face, point) {
-            return e.mean;
-        }
-        if face >= self.scene.faces.len() {
-            return Rgb::splat(f64::NAN);
-        }
-        let key = mix64(
-            point.x.to_bits() ^ mix64(point.y.to_bits() ^ mix64(point.z.to_bits() ^ face as u64)),
+        let estimator = PathEstimator::new(
+            self.scene,
+            self.accel,
+            self.params.max_depth,
+            self.params.direct,
         );
-        let params = PointParams {
-            samples: self.samples.max(self.params.initial_samples),
-            max_depth: self.params.max_depth,
-            direct: self.params.direct,
-        };
-        let p = [SurfacePoint {
-            face,
-            point,
-            normal: self.scene.faces[face].normal,
-        }];
-        estimate_points(self.scene, self.accel, &p, &params, mix64(self.seed ^ key))[0].mean
+        self.runs.radiosity_at(self.scene, face, point, &|p, rng| {
+            estimator.radiosity(p.face, p.point, p.normal, rng)
+        })
     }
 }

@@ -10,7 +10,7 @@ use radlab_scene::Rgb;
 
 /// Count, mean and sum of squared deviations of a stream of RGB samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct RunningStats {
+pub struct RunningStats {
     n: u64,
     mean: Rgb,
     m2: Rgb,
@@ -18,7 +18,7 @@ pub(crate) struct RunningStats {
 
 impl RunningStats {
     /// Adds one sample.
-    pub(crate) fn push(&mut self, x: Rgb) {
+    pub fn push(&mut self, x: Rgb) {
         self.n += 1;
         let delta = x - self.mean;
         self.mean += delta / self.n as f64;
@@ -26,7 +26,7 @@ impl RunningStats {
     }
 
     /// Adds the samples summarised by `other` (the order of merges is part of the result's bits).
-    pub(crate) fn merge(&mut self, other: &RunningStats) {
+    pub fn merge(&mut self, other: &RunningStats) {
         if other.n == 0 {
             return;
         }
@@ -44,17 +44,17 @@ impl RunningStats {
 
     /// Number of samples.
     #[cfg(test)]
-    pub(crate) fn count(&self) -> u64 {
+    pub fn count(&self) -> u64 {
         self.n
     }
 
     /// Sample mean (zero before any sample).
-    pub(crate) fn mean(&self) -> Rgb {
+    pub fn mean(&self) -> Rgb {
         self.mean
     }
 
     /// Standard error of the mean per channel; infinite with fewer than two samples.
-    pub(crate) fn std_error(&self) -> Rgb {
+    pub fn std_error(&self) -> Rgb {
         if self.n < 2 {
             return Rgb::splat(f64::INFINITY);
         }

@@ -23,13 +23,14 @@
 //! Photons, precomputed points, their k-d trees (kiddo) and the per-point state are counted in bytes; every
 //! ray (photon flights, gathers, leak tests, shadow rays) through the shared `Accel`'s counter.
 
-use std::collections::HashMap;
 use std::num::NonZero;
 
 use glam::DVec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
-use radlab_pathtrace::{EmitterSampler, PathEstimator, SurfacePoint};
+use radlab_pathtrace::{
+    EmitterSampler, PathEstimator, QueryPoints, SurfacePoint, coordinate_stream,
+};
 use radlab_scene::{
     FaceId, Rgb, Scene,
     sampling::{self, Rng, mix64},
@@ -89,8 +90,7 @@ pub struct PhotonMapSolver<'a> {
     estimator: PathEstimator<'a>,
     emitters: EmitterSampler,
     seed: u64,
-    points: Vec<SurfacePoint>,
-    index: HashMap<(FaceId, [u64; 3]), usize>,
+    points: QueryPoints,
     map: Option<PhotonMap>,
     irradiance: Vec<IrradiancePoint>,
     irradiance_tree: Option<ImmutableKdTree<f64, 3>>,
@@ -113,16 +113,6 @@ impl std::fmt::Debug for PhotonMapSolver<'_> {
     }
 }
 
-fn point_key(face: FaceId, p: DVec3) -> (FaceId, [u64; 3]) {
-    (face, [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
-}
-
-/// The random stream of a point off the query set: a hash of its face and coordinates with the top bit set, so
-/// it never coincides with a query point's index.
-fn coordinate_stream(face: FaceId, p: DVec3) -> u64 {
-    mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits() ^ face as u64))) | 1 << 63
-}
-
 impl<'a> PhotonMapSolver<'a> {
     /// The photon map for `points` (nothing traced yet).
     pub fn new(
@@ -133,26 +123,7 @@ impl<'a> PhotonMapSolver<'a> {
         points: Vec<SurfacePoint>,
     ) -> Result<Self, SolveError> {
         params.validate()?;
-        if let Some((i, p)) = points
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.face >= scene.faces.len() || !p.point.is_finite())
-        {
-            return Err(SolveError::param(
-                "points",
-                format!(
-                    "point {i} (face {}, {:?}) is not a finite point on one of the scene's {} faces",
-                    p.face,
-                    p.point,
-                    scene.faces.len()
-                ),
-            ));
-        }
-        let index = points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (point_key(p.face, p.point), i))
-            .collect();
+        let points = QueryPoints::new(scene, points)?;
         let r0 = params.initial_radius * scene.diagonal();
         Ok(Self {
             scene,
@@ -168,7 +139,6 @@ impl<'a> PhotonMapSolver<'a> {
                 };
                 points.len()
             ],
-            index,
             points,
             map: None,
             irradiance: Vec::new(),
@@ -403,8 +373,7 @@ impl<'a> PhotonMapSolver<'a> {
     }
 
     fn bytes(&self) -> u64 {
-        (self.points.capacity() * size_of::<SurfacePoint>()
-            + self.index.capacity() * (size_of::<(FaceId, [u64; 3])>() + 8)
+        (self.points.bytes()
             + self.map.as_ref().map_or(0, PhotonMap::bytes)
             + self.irradiance.capacity() * size_of::<IrradiancePoint>()
             + self
@@ -474,9 +443,9 @@ impl Solution for PhotonMapSolver<'_> {
             return Rgb::splat(f64::NAN);
         }
         let n = self.scene.faces[face].normal;
-        match self.index.get(&point_key(face, point)) {
-            Some(&i) if self.converged => self.answers[i],
-            Some(&i) => self.radiosity(face, point, n, Some(i), i as u64),
+        match self.points.find(face, point) {
+            Some(i) if self.converged => self.answers[i],
+            Some(i) => self.radiosity(face, point, n, Some(i), i as u64),
             None => self.radiosity(face, point, n, None, coordinate_stream(face, point)),
         }
     }

@@ -12,9 +12,9 @@
 use radlab_method::{MethodParams, Solver, Step, evaluation_points};
 use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
 use radlab_photon_map::{PhotonMapParams, PhotonMapSolver, PhotonMode};
-use radlab_scene::glam::{DVec3, dvec3};
-use radlab_scene::{Rgb, Scene, SceneBuilder, builtin};
-use radlab_testkit::material;
+use radlab_scene::glam::dvec3;
+use radlab_scene::{Rgb, Scene, builtin};
+use radlab_testkit::two_rooms;
 use radlab_visibility::Accel;
 
 fn points(scene: &Scene, n: usize, seed: u64) -> Vec<SurfacePoint> {
@@ -163,109 +163,6 @@ fn agrees_with_the_path_tracer_on_the_cornell_box() {
             );
         }
     }
-}
-
-/// Two rooms side by side on one floor quad and under one ceiling quad, split by a wall of thickness `t`
-/// (two faces back to back); the light hangs in room A (x < 1).
-fn two_rooms(t: f64) -> Scene {
-    let mut b = SceneBuilder::new("two rooms behind a thin wall");
-    let white = material(&mut b, "white", 0.7, 0.0);
-    let light = material(&mut b, "light", 0.5, 20.0);
-    let q = |b: &mut SceneBuilder, p: [DVec3; 4], m: u32| {
-        b.add_polygon_points(&p, m, "two rooms").expect("quad");
-    };
-    let (w, h) = (1.0 - t / 2.0, 1.0 + t / 2.0);
-    q(
-        &mut b,
-        [
-            dvec3(0., 0., 0.),
-            dvec3(2., 0., 0.),
-            dvec3(2., 1., 0.),
-            dvec3(0., 1., 0.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(0., 0., 1.),
-            dvec3(0., 1., 1.),
-            dvec3(2., 1., 1.),
-            dvec3(2., 0., 1.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(0., 0., 0.),
-            dvec3(0., 1., 0.),
-            dvec3(0., 1., 1.),
-            dvec3(0., 0., 1.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(0., 0., 0.),
-            dvec3(0., 0., 1.),
-            dvec3(2., 0., 1.),
-            dvec3(2., 0., 0.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(0., 1., 0.),
-            dvec3(2., 1., 0.),
-            dvec3(2., 1., 1.),
-            dvec3(0., 1., 1.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(2., 0., 0.),
-            dvec3(2., 0., 1.),
-            dvec3(2., 1., 1.),
-            dvec3(2., 1., 0.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(w, 0., 0.),
-            dvec3(w, 0., 1.),
-            dvec3(w, 1., 1.),
-            dvec3(w, 1., 0.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(h, 0., 0.),
-            dvec3(h, 1., 0.),
-            dvec3(h, 1., 1.),
-            dvec3(h, 0., 1.),
-        ],
-        white,
-    );
-    q(
-        &mut b,
-        [
-            dvec3(0.3, 0.3, 0.99),
-            dvec3(0.3, 0.7, 0.99),
-            dvec3(0.7, 0.7, 0.99),
-            dvec3(0.7, 0.3, 0.99),
-        ],
-        light,
-    );
-    b.build().expect("scene")
 }
 
 #[test]

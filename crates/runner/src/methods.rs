@@ -322,6 +322,33 @@ pub fn methods() -> Vec<MethodInfo> {
                 balance: 1e-2,
             },
         },
+        MethodInfo {
+            name: "bdpt",
+            summary: "Bidirectional path tracing (Lafortune & Willems 1993; Veach & Guibas 1995; Veach 1997) at \
+                 the points asked about: per sample a light subpath from the emitters and an eye subpath from \
+                 the point, joined by every strategy (the point is a pinhole: a light path hitting it exactly \
+                 is impossible and left out) and weighted by multiple importance sampling, heuristic = balance \
+                 or power; Russian roulette lengths. Unbiased; pays where light arrives indirectly.",
+            params: param_lines::<radlab_bdpt::BdptParams>,
+            build: |scene, accel, table, seed, points| {
+                let params = radlab_bdpt::BdptParams::from_table(table)?;
+                let points = points
+                    .iter()
+                    .map(radlab_pathtrace::SurfacePoint::from)
+                    .collect();
+                Ok(Box::new(radlab_bdpt::BdptSolver::new(
+                    scene, accel, params, seed, points,
+                )?))
+            },
+            validate: |table| radlab_bdpt::BdptParams::from_table(table).map(|_| ()),
+            // 256 samples per point from 4 independent seeds: unbiased, so every bound is the noise the suite
+            // adds (three standard errors of the seeds' mean), and the balance has no bias term.
+            test: TestSettings {
+                params: |_| table(&[("samples", 256.into())]),
+                seeds: 4,
+                balance: 0.0,
+            },
+        },
     ]
 }
 

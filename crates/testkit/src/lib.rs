@@ -2,7 +2,7 @@
 //!
 //! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
 //! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
-//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, and a scene
+//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, and a scene
 //! scaled by a factor (results must not depend on it). Test support, kept in one place so no crate carries
 //! its own copy; nothing in the solvers uses it.
 
@@ -107,5 +107,155 @@ pub fn scaled(scene: &Scene, s: f64) -> Scene {
             .expect("valid face");
         assert_eq!(added, 1, "a face changed under scaling");
     }
+    b.build().expect("scene")
+}
+
+/// Two rooms side by side (for light-leak tests) on one floor quad and under one ceiling quad, split by a wall of thickness `t`
+/// (two faces back to back); the light hangs in room A (x < 1). Room B's faces are named "dark".
+pub fn two_rooms(t: f64) -> Scene {
+    let mut b = SceneBuilder::new("two rooms behind a thin wall");
+    let white = material(&mut b, "white", 0.7, 0.0);
+    let dark = material(&mut b, "dark", 0.7, 0.0);
+    let light = material(&mut b, "light", 0.5, 20.0);
+    let q = |b: &mut SceneBuilder, p: [DVec3; 4], m: u32| {
+        b.add_polygon_points(&p, m, "two rooms").expect("quad");
+    };
+    let (w, h) = (1.0 - t / 2.0, 1.0 + t / 2.0);
+    // Floor (up) and ceiling (down), one quad each under both rooms.
+    q(
+        &mut b,
+        [
+            dvec3(0., 0., 0.),
+            dvec3(2., 0., 0.),
+            dvec3(2., 1., 0.),
+            dvec3(0., 1., 0.),
+        ],
+        white,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(0., 0., 1.),
+            dvec3(0., 1., 1.),
+            dvec3(2., 1., 1.),
+            dvec3(2., 0., 1.),
+        ],
+        white,
+    );
+    // Room A's walls (x = 0, y = 0, y = 1 for x < w) and the wall's A side (x = w, facing −x).
+    q(
+        &mut b,
+        [
+            dvec3(0., 0., 0.),
+            dvec3(0., 1., 0.),
+            dvec3(0., 1., 1.),
+            dvec3(0., 0., 1.),
+        ],
+        white,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(0., 0., 0.),
+            dvec3(0., 0., 1.),
+            dvec3(w, 0., 1.),
+            dvec3(w, 0., 0.),
+        ],
+        white,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(0., 1., 0.),
+            dvec3(w, 1., 0.),
+            dvec3(w, 1., 1.),
+            dvec3(0., 1., 1.),
+        ],
+        white,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(w, 0., 0.),
+            dvec3(w, 0., 1.),
+            dvec3(w, 1., 1.),
+            dvec3(w, 1., 0.),
+        ],
+        white,
+    );
+    // Room B's walls and the wall's B side (x = h, facing +x).
+    q(
+        &mut b,
+        [
+            dvec3(2., 0., 0.),
+            dvec3(2., 0., 1.),
+            dvec3(2., 1., 1.),
+            dvec3(2., 1., 0.),
+        ],
+        dark,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(h, 0., 0.),
+            dvec3(h, 0., 1.),
+            dvec3(2., 0., 1.),
+            dvec3(2., 0., 0.),
+        ],
+        dark,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(h, 1., 0.),
+            dvec3(2., 1., 0.),
+            dvec3(2., 1., 1.),
+            dvec3(h, 1., 1.),
+        ],
+        dark,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(h, 0., 0.),
+            dvec3(h, 1., 0.),
+            dvec3(h, 1., 1.),
+            dvec3(h, 0., 1.),
+        ],
+        dark,
+    );
+    // The wall's top and bottom are on the ceiling and floor quads; its ends on the side walls (y = 0, 1),
+    // covered by small strips.
+    q(
+        &mut b,
+        [
+            dvec3(w, 0., 0.),
+            dvec3(w, 0., 1.),
+            dvec3(h, 0., 1.),
+            dvec3(h, 0., 0.),
+        ],
+        white,
+    );
+    q(
+        &mut b,
+        [
+            dvec3(w, 1., 0.),
+            dvec3(h, 1., 0.),
+            dvec3(h, 1., 1.),
+            dvec3(w, 1., 1.),
+        ],
+        white,
+    );
+    // The light, facing down, in room A.
+    q(
+        &mut b,
+        [
+            dvec3(0.3, 0.3, 0.99),
+            dvec3(0.3, 0.7, 0.99),
+            dvec3(0.7, 0.7, 0.99),
+            dvec3(0.7, 0.3, 0.99),
+        ],
+        light,
+    );
     b.build().expect("scene")
 }
