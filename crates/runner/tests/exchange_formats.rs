@@ -131,7 +131,17 @@ fn export_writes_complete_radiance_and_mitsuba_scenes() {
     assert!(o.status.success(), "{}", text(&o));
     let r = std::fs::read_to_string(rad.join("scene.rad")).expect("scene.rad");
     assert_eq!(r.matches(" polygon f").count(), scene.faces.len());
-    assert_eq!(r.matches("void plastic").count(), 3);
+    // Three reflecting materials, each one-sided: its plastic where a ray meets the front, black behind.
+    assert_eq!(r.matches("void plastic").count(), 4);
+    assert!(r.contains("void plastic radlab_back\n0\n0\n5 0 0 0 0 0\n"));
+    for k in [0, 1, 2] {
+        assert!(
+            r.contains(&format!(
+                "void mixfunc mat_{k}\n4 mat_{k}_front radlab_back if(Rdot,1,0) .\n0\n0\n"
+            )),
+            "mat_{k}"
+        );
+    }
     // The light: radiance E/π per channel.
     let e = radlab_scene::builtin::cornell_light_exitance() / std::f64::consts::PI;
     assert!(r.contains(&format!(

@@ -11,14 +11,20 @@
 //! - **Radiance** (Ward 1994, "The RADIANCE lighting simulation and rendering system"): `scene.rad` with one
 //!   `plastic` of zero specularity and roughness per material (a Lambertian reflector of reflectance ρ) and one
 //!   `light` of radiance E/π per emitting material; faces as `polygon`s (right-hand rule, as radlab's). A
-//!   Radiance `light` does not reflect, so an emitter's own reflectance is dropped (radlab keeps it; the
-//!   difference is ρ_light H_light on the emitter, seen by the rest of the scene). `radiance-points.py` runs
-//!   `oconv` and `rtrace -I` with pure Monte Carlo ambient sampling (`-aa 0`).
+//!   Radiance `plastic` reflects from both sides, radlab's faces from their front only (a back absorbs), so
+//!   each plastic is wrapped in a `mixfunc` that shows it where the ray meets the front (`Rdot` > 0) and a black
+//!   `plastic` elsewhere: without it the back of an open surface (a table top, a height field) reflects in
+//!   Radiance and not in radlab or Mitsuba. A Radiance `light` emits from its front only, as radlab's, but
+//!   does not reflect, so an emitter's own reflectance is dropped (radlab keeps it; the difference is
+//!   ρ_light H_light on the emitter, seen by the rest of the scene). `radiance-points.py` runs `oconv` and
+//!   `rtrace -I` with pure Monte Carlo ambient sampling (`-aa 0`).
 //! - **Mitsuba 3** (Jakob et al. 2022): `scene.xml` with one binary PLY per material (`mat_K.ply`, triangles),
 //!   a `diffuse` BSDF of reflectance ρ, an `area` emitter of radiance E/π where E > 0, the `path` integrator
-//!   with unlimited depth and the scene's camera as a `perspective` sensor. `mitsuba-points.py` estimates H at
-//!   each point by cosine-weighted directions whose incident radiance Mitsuba's own path integrator returns:
-//!   H = π · mean(L).
+//!   with unlimited depth and the scene's camera as a `perspective` sensor (Mitsuba's `diffuse` reflects from
+//!   the front only and its `area` emitter emits from the front only, as radlab's faces). `mitsuba-points.py`
+//!   estimates H at each point per sample as the direct light by Mitsuba's emitter sampling at the point plus
+//!   π L along a cosine-weighted direction, L the radiance Mitsuba's own path integrator returns there less the
+//!   emission of the surface it meets (`--direct hemisphere`: H = π · mean(L) with emitters seen, noisier).
 //!
 //! Every file is written to a staging directory beside DIR and moved into DIR only when all are complete, so
 //! a failed export leaves no partial files.
@@ -192,11 +198,16 @@ fn points_csv(scene: &Scene, points: &[EvalPoint]) -> Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
+/// The black material a Radiance face shows from behind.
+const BACK: &str = "radlab_back";
+
 /// A Radiance scene description: materials, then one polygon per face.
 pub fn radiance_scene(scene: &Scene) -> String {
     let mut s = format!(
-        "# {} exported by radlab: {} faces. Lambertian `plastic` (specularity 0, roughness 0) of reflectance rho;\n\
-         # emitters as `light` of radiance E/pi (a Radiance light does not reflect).\n",
+        "# {} exported by radlab: {} faces. Lambertian `plastic` (specularity 0, roughness 0) of reflectance rho,\n\
+         # one-sided as radlab's faces: a `mixfunc` shows it where the ray meets the front (Rdot > 0) and black\n\
+         # `radlab_back` elsewhere; emitters as `light` of radiance E/pi (a Radiance light does not reflect).\n\
+         \nvoid plastic {BACK}\n0\n0\n5 0 0 0 0 0\n",
         scene.name,
         scene.faces.len()
     );
@@ -210,7 +221,8 @@ pub fn radiance_scene(scene: &Scene) -> String {
             let r = m.reflectance;
             let _ = writeln!(
                 s,
-                "void plastic mat_{k}\n0\n0\n5 {} {} {} 0 0",
+                "void plastic mat_{k}_front\n0\n0\n5 {} {} {} 0 0\n\n\
+                 void mixfunc mat_{k}\n4 mat_{k}_front {BACK} if(Rdot,1,0) .\n0\n0",
                 r.x, r.y, r.z
             );
         }

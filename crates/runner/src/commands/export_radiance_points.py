@@ -6,7 +6,7 @@ column, facing the normal; pure Monte Carlo ambient sampling, -aa 0) REPEATS tim
 uncorrelated sampling (-u+), and writes radiance.csv with x,y,z,r,g,b,se_r,se_g,se_b: B = E + rho H and its
 standard error over the repeats. `radlab compare` reads it.
 
-Usage: python3 radiance-points.py [--repeats 16] [--ab 16] [--ad 512] [--lw 1e-5] [--out radiance.csv]
+Usage: python3 radiance-points.py [--repeats 16] [--ab 16] [--ad 128] [--lw 1e-5] [--out radiance.csv]
 Needs oconv and rtrace on PATH, or `pip install pyradiance` (its bundled binaries are used).
 """
 import argparse
@@ -22,7 +22,7 @@ here = os.path.dirname(os.path.abspath(__file__))
 ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 ap.add_argument("--repeats", type=int, default=16, help="independent rtrace evaluations per point (standard error)")
 ap.add_argument("--ab", type=int, default=16, help="ambient bounces")
-ap.add_argument("--ad", type=int, default=512, help="ambient divisions")
+ap.add_argument("--ad", type=int, default=128, help="ambient divisions")
 ap.add_argument("--lw", type=float, default=1e-5, help="limit weight")
 ap.add_argument("--out", default=os.path.join(here, "radiance.csv"))
 a = ap.parse_args()
@@ -43,6 +43,16 @@ def tool(name):
     sys.exit(f"{name} not found: install Radiance or `pip install pyradiance`")
 
 
+def raypath(rtrace):
+    """RAYPATH with Radiance's library (rayinit.cal, which the faces' one-sided `mixfunc` needs for Rdot)."""
+    paths = [p for p in os.environ.get("RAYPATH", "").split(os.pathsep) if p] or [".", "/usr/local/lib/ray"]
+    root = os.path.dirname(os.path.dirname(os.path.realpath(rtrace)))
+    for lib in (os.path.join(root, "lib"), os.path.join(root, "lib", "ray")):
+        if os.path.exists(os.path.join(lib, "rayinit.cal")) and lib not in paths:
+            paths.append(lib)
+    return os.pathsep.join(paths)
+
+
 with open(os.path.join(here, "points.csv")) as f:
     rows = list(csv.DictReader(f))
 oct_path = os.path.join(here, "scene.oct")
@@ -59,7 +69,11 @@ cmd = [tool("rtrace"), "-I", "-h", "-u+", "-ab", str(a.ab), "-aa", "0", "-ad", s
        "-lw", str(a.lw), "-lr", str(-abs(4 * a.ab)), "-dj", "1", "-ds", "0.02", "-dt", "0", "-dc", "1",
        "-ss", "0", "-st", "1", oct_path]
 t0 = time.time()
-out = subprocess.run(cmd, input="".join(lines), capture_output=True, text=True, check=True).stdout.split()
+env = dict(os.environ, RAYPATH=raypath(cmd[0]))
+run = subprocess.run(cmd, input="".join(lines), capture_output=True, text=True, env=env)
+if run.returncode != 0:
+    sys.exit(f"rtrace failed ({run.returncode}): {run.stderr.strip()}")
+out = run.stdout.split()
 vals = [float(v) for v in out]
 if len(vals) != 3 * len(lines):
     sys.exit(f"rtrace returned {len(vals)} numbers for {len(lines)} rays")
