@@ -219,3 +219,140 @@ fn export_writes_complete_radiance_and_mitsuba_scenes() {
         "{left:?}"
     );
 }
+
+/// Whether `python3 -c CODE` runs and exits 0 (a renderer's Python package is installed and works).
+fn python_runs(code: &str) -> bool {
+    std::process::Command::new("python3")
+        .args(["-c", code])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// Rows of a points CSV by column name: x,y,z,r,g,b and se_r,se_g,se_b.
+fn answers(bytes: &[u8]) -> Vec<[f64; 9]> {
+    let (h, rows) = csv_rows(bytes);
+    let col = |name: &str| h.iter().position(|c| c == name).expect(name);
+    let cols = ["x", "y", "z", "r", "g", "b", "se_r", "se_g", "se_b"].map(col);
+    rows.iter()
+        .map(|r| cols.map(|c| r[c].parse::<f64>().expect("number")))
+        .collect()
+}
+
+/// The other renderer's answers at the exported points against radlab's path tracer at the same points: the
+/// mean over points and channels of z² = (B − R)² / (s_B² + s_R²), which is 1 for independent unbiased answers,
+/// and the z-score of their summed signed difference.
+/// On the Cornell box with a light that does not reflect (Radiance's `light` cannot), both renderers model
+/// radlab's scene exactly, so anything well above 1 is a disagreement (scenes/README.md, "The cross-check").
+fn cross_check(renderer: &str, script: &str, script_args: &[&str]) -> (f64, f64) {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let scene = tmp.path().join("cornell-dark-light.mgf");
+    let mgf = std::fs::read_to_string(repo().join("scenes/cornell.mgf")).expect("cornell.mgf");
+    assert!(mgf.contains("rd 0.78"));
+    std::fs::write(&scene, mgf.replace("rd 0.78", "rd 0")).expect("write");
+    let dir = tmp.path().join(renderer);
+    let scene = scene.to_str().expect("utf8");
+    let args = [
+        "export",
+        scene,
+        "--to",
+        renderer,
+        "--out",
+        dir.to_str().expect("utf8"),
+        "--points",
+        "64",
+    ];
+    let o = radlab(tmp.path(), &args);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = dir.join("answers.csv");
+    let o = std::process::Command::new("python3")
+        .arg(dir.join(script))
+        .args(script_args)
+        .args(["--out", out.to_str().expect("utf8")])
+        .output()
+        .expect("python3 runs");
+    assert!(o.status.success(), "{}", text(&o));
+    let theirs = answers(&std::fs::read(&out).expect("answers"));
+    let points = dir.join("points.csv");
+    let probe = [
+        "probe",
+        scene,
+        "--method",
+        "pathtrace",
+        "--set",
+        "samples=65536",
+        "--points",
+        points.to_str().expect("utf8"),
+    ];
+    let o = radlab(tmp.path(), &probe);
+    assert!(o.status.success(), "{}", text(&o));
+    let ours = answers(&o.stdout);
+    assert_eq!(theirs.len(), 64);
+    assert_eq!(ours.len(), 64);
+    let mut z2 = Vec::new();
+    // The signed difference of channel sums over all points, and its variance taking each point's channels
+    // as fully correlated (they come from the same paths): the one bound that sees a bias smaller than a
+    // point's noise.
+    let (mut signed, mut signed_var) = (0.0, 0.0);
+    for (t, r) in theirs.iter().zip(&ours) {
+        signed += (t[3] + t[4] + t[5]) - (r[3] + r[4] + r[5]);
+        signed_var += (t[6] + t[7] + t[8]).powi(2) + (r[6] + r[7] + r[8]).powi(2);
+        assert!(
+            (t[0] - r[0]).abs() + (t[1] - r[1]).abs() + (t[2] - r[2]).abs() < 1e-6,
+            "same points"
+        );
+        for c in 3..6 {
+            let var = t[c + 3].powi(2) + r[c + 3].powi(2);
+            if var == 0.0 {
+                // A point no light reaches (under a block): both must say 0, exactly.
+                assert_eq!((t[c], r[c]), (0.0, 0.0), "an exact answer must agree");
+                continue;
+            }
+            z2.push((t[c] - r[c]).powi(2) / var);
+        }
+    }
+    let mean = z2.iter().sum::<f64>() / z2.len() as f64;
+    let z = signed / signed_var.sqrt();
+    eprintln!(
+        "{renderer}: mean z² {mean:.2} over {} values, signed z {z:.2}",
+        z2.len()
+    );
+    (mean, z)
+}
+
+/// Radiance (Ward 1994) agrees with radlab's path tracer point by point. Runs where Radiance is installed
+/// (`rtrace` on PATH, or `pip install pyradiance`); elsewhere (CI) it says so and checks nothing.
+#[test]
+fn radiance_agrees_with_the_path_tracer_where_installed() {
+    let on_path = std::process::Command::new("rtrace")
+        .arg("-version")
+        .output()
+        .is_ok();
+    if !on_path && !python_runs("import pyradiance") {
+        eprintln!("skipped: Radiance is not installed (rtrace, or `pip install pyradiance`)");
+        return;
+    }
+    let (z2, z) = cross_check("radiance", "radiance-points.py", &["--repeats", "32"]);
+    // 64 points: the mean of z² has a standard deviation of about 0.2 where the answers agree.
+    assert!(z2 < 2.0, "Radiance against radlab: mean z² {z2}");
+    assert!(
+        z.abs() < 4.0,
+        "Radiance against radlab: signed difference at {z} standard errors"
+    );
+}
+
+/// Mitsuba 3 (Jakob et al. 2022) agrees with radlab's path tracer point by point. Runs where Mitsuba's
+/// `llvm_ad_rgb` variant loads (`pip install mitsuba` and an LLVM it accepts: scenes/README.md); elsewhere it
+/// says so and checks nothing.
+#[test]
+fn mitsuba_agrees_with_the_path_tracer_where_installed() {
+    if !python_runs("import mitsuba as mi; mi.set_variant('llvm_ad_rgb')") {
+        eprintln!("skipped: Mitsuba 3 (variant llvm_ad_rgb) is not installed");
+        return;
+    }
+    let (z2, z) = cross_check("mitsuba", "mitsuba-points.py", &["--spp", "65536"]);
+    assert!(z2 < 2.0, "Mitsuba against radlab: mean z² {z2}");
+    assert!(
+        z.abs() < 4.0,
+        "Mitsuba against radlab: signed difference at {z} standard errors"
+    );
+}
