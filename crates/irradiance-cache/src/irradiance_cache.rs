@@ -409,6 +409,16 @@ impl Solver for IrradianceCacheSolver<'_> {
         self
     }
 
+    fn counters(&self) -> Vec<(&'static str, u64)> {
+        let c = self.counts();
+        vec![
+            ("records", c.records),
+            ("query_points", c.query_points),
+            ("reused", c.reused),
+            ("passes", c.passes),
+        ]
+    }
+
     fn stats(&self) -> Stats {
         Stats {
             steps: self.steps,

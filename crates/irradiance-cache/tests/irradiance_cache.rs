@@ -232,6 +232,16 @@ fn reuse_grows_with_the_number_of_points() {
         assert!(share > last, "{n} points: reused share {share} <= {last}");
         last = share;
         assert_eq!(s.stats().elements, c.records);
+        // What the runner writes to runs.csv's `counters` column.
+        assert_eq!(
+            s.counters(),
+            [
+                ("records", c.records),
+                ("query_points", n as u64),
+                ("reused", c.reused),
+                ("passes", c.passes)
+            ]
+        );
         assert!(s.stats().rays >= c.records * c.samples_per_record);
         assert!(s.stats().bytes > 0);
     }

@@ -61,6 +61,11 @@ pub trait Solver: Send {
     fn solution(&self) -> &dyn Solution;
     /// Counters after the steps so far.
     fn stats(&self) -> Stats;
+    /// The method's own counters beyond [`Stats`], by name (an irradiance cache's records and the query points
+    /// it answered by interpolation, say); none by default. The runner writes them to `runs.csv`.
+    fn counters(&self) -> Vec<(&'static str, u64)> {
+        Vec::new()
+    }
 }
 
 /// A solution that is constant per face (used for tests, and by methods whose elements are whole faces).

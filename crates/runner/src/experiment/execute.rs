@@ -133,6 +133,10 @@ pub struct RunResult {
     pub floor_l2: f64,
     /// Reference kind.
     pub reference: String,
+    /// The method's own counters after the last step ([`radlab_method::Solver::counters`]), `name=value`
+    /// joined by `;` (empty for methods without any).
+    #[serde(default)]
+    pub counters: String,
 }
 
 /// One row of `trace.csv`.
@@ -469,6 +473,12 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         result.form_factors,
         result.rays,
     ) = (st.elements, st.links, st.form_factors, st.rays);
+    result.counters = solver
+        .counters()
+        .iter()
+        .map(|(name, value)| format!("{name}={value}"))
+        .collect::<Vec<_>>()
+        .join(";");
     (result.l1, result.l2, result.max) = (last_eval.l1, last_eval.l2, last_eval.max);
     write_bytes(&trace_path(&job.dir, &result.id), |w| {
         let mut out = csv::Writer::from_writer(w);
