@@ -75,6 +75,9 @@
 //!   path tracing) holds its points as [`QueryPoints`] (validated, indexed by exact coordinates; streams of
 //!   other points from [`coordinate_stream`]), and the stepped samplers share [`SteppedPoints`] (the doubling
 //!   schedule, streams, running statistics and counts over [`sample_points`]).
+//! - **Particles from the emitters**: [`trace_photons`] (photon_tracing.rs) traces power-carrying particles
+//!   with Russian roulette for every light-tracing method (photon maps, density estimation, radiosity
+//!   textures): one tracer, one stream numbering, the same result for any thread count.
 //! - **One-sided faces**: a face emits and reflects from its front only; light reaching a back is absorbed and
 //!   a back is black, as in every radlab method (and as the point-to-polygon form factor assumes).
 
@@ -83,6 +86,7 @@ mod discrete_distribution;
 mod emitter_sampling;
 mod mesh_radiosity;
 mod path_estimator;
+mod photon_tracing;
 mod point_estimator;
 mod point_solver;
 mod query_points;
@@ -94,6 +98,7 @@ pub use camera_render::{RenderParams, render};
 pub use emitter_sampling::{EmitterSampler, LightSample};
 pub use mesh_radiosity::{McMethod, McRadiosityParams, McRadiositySolver};
 pub use path_estimator::{DirectSampling, PathEstimator};
+pub use photon_tracing::{CHUNK, EMPTY_CHUNKS, Photon, PhotonBatch, trace_photons};
 pub use point_estimator::{
     DEFAULT_MAX_DEPTH, PointEstimate, PointParams, PointSampler, SAMPLES_PER_CHUNK, SurfacePoint,
     estimate_points, estimate_points_with_progress, sample_points,

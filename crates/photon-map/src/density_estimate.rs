@@ -19,7 +19,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use radlab_scene::Rgb;
 use serde::{Deserialize, Serialize};
 
-use crate::photon_tracing::Photon;
+use radlab_pathtrace::Photon;
 
 /// The density-estimation filter.
 #[derive(

@@ -3,7 +3,7 @@
 //! Jensen 1996 ("Global illumination using photon maps"), Jensen 2001 (*Realistic Image Synthesis Using
 //! Photon Mapping*), Christensen 1999 (precomputed irradiance for the final gather) and progressive photon
 //! mapping at fixed points (Hachisuka, Ogaki & Jensen 2008). Photons leave the emitters and are reflected by
-//! Russian roulette (photon_tracing.rs); irradiance is a k-nearest-neighbour density estimate over a kiddo
+//! Russian roulette (radlab-pathtrace's `trace_photons`); irradiance is a k-nearest-neighbour density estimate over a kiddo
 //! k-d tree with a cone or Epanechnikov filter (density_estimate.rs); [`PhotonMapSolver`] (photon_map.rs)
 //! answers at query points by a final gather or progressively. Direct light is next-event estimation at the
 //! query points in both modes (radlab-pathtrace's estimator).
@@ -34,9 +34,7 @@
 mod density_estimate;
 mod params;
 mod photon_map;
-mod photon_tracing;
 
 pub use density_estimate::{DensityFilter, PhotonMap};
 pub use params::{PhotonMapParams, PhotonMode};
 pub use photon_map::{PhotonCounts, PhotonMapSolver};
-pub use photon_tracing::{CHUNK, EMPTY_CHUNKS, Photon, PhotonBatch, trace_photons};

@@ -40,7 +40,7 @@ use rayon::prelude::*;
 
 use crate::density_estimate::PhotonMap;
 use crate::params::{PhotonMapParams, PhotonMode};
-use crate::photon_tracing::{CHUNK, trace_photons};
+use radlab_pathtrace::{CHUNK, trace_photons};
 
 const PHOTON_STREAM_TAG: u64 = 0x7068_6f74_6f6e_6d70; // "photonmp"
 const GATHER_STREAM_TAG: u64 = 0x7068_6761_7468_6572; // "phgather"

@@ -11,9 +11,10 @@
 //! landings (the last emitted photon kept whole), so the map is the same for any number of threads.
 
 use glam::DVec3;
-use radlab_pathtrace::EmitterSampler;
 use radlab_scene::{FaceId, Rgb, Scene, sampling};
 use radlab_visibility::Accel;
+
+use crate::EmitterSampler;
 use rayon::prelude::*;
 
 /// Photons emitted per chunk.
