@@ -6,7 +6,12 @@ column, facing the normal; pure Monte Carlo ambient sampling, -aa 0) REPEATS tim
 uncorrelated sampling (-u+), and writes radiance.csv with x,y,z,r,g,b,se_r,se_g,se_b: B = E + rho H and its
 standard error over the repeats. `radlab compare` reads it.
 
-Usage: python3 radiance-points.py [--repeats 16] [--ab 16] [--ad 128] [--lw 1e-5] [--out radiance.csv]
+With --aa > 0 Radiance's irradiance cache answers instead (Ward, Rubinstein & Clear 1988: ambient accuracy
+-aa, super-samples -as, one evaluation per point, so no standard error columns), in --processes rtrace
+processes (-n), for timing the cache against radlab's `irradiance-cache` at the same points.
+
+Usage: python3 radiance-points.py [--repeats 16] [--ab 16] [--ad 128] [--lw 1e-5] [--aa 0] [--as 0]
+                                  [--processes 1] [--out radiance.csv]
 Needs oconv and rtrace on PATH, or `pip install pyradiance` (its bundled binaries are used).
 """
 import argparse
@@ -24,8 +29,16 @@ ap.add_argument("--repeats", type=int, default=16, help="independent rtrace eval
 ap.add_argument("--ab", type=int, default=16, help="ambient bounces")
 ap.add_argument("--ad", type=int, default=128, help="ambient divisions")
 ap.add_argument("--lw", type=float, default=1e-5, help="limit weight")
+ap.add_argument("--aa", type=float, default=0.0, help="ambient accuracy (0: no cache, pure Monte Carlo)")
+ap.add_argument("--as", dest="ss", type=int, default=0, help="ambient super-samples (with --aa > 0)")
+ap.add_argument("--processes", type=int, default=1, help="rtrace processes (-n)")
 ap.add_argument("--out", default=os.path.join(here, "radiance.csv"))
 a = ap.parse_args()
+if a.aa < 0 or a.ss < 0 or a.processes < 1 or a.repeats < 1:
+    sys.exit("--aa and --as must be >= 0, --processes and --repeats >= 1")
+cached = a.aa > 0
+if cached:
+    a.repeats = 1  # cached values are not independent repeats
 
 
 def tool(name):
@@ -65,7 +78,8 @@ for r in rows:
     lift = float(r["lift"])
     o = [p[i] + lift * n[i] for i in range(3)]
     lines.extend([f"{o[0]!r} {o[1]!r} {o[2]!r} {n[0]!r} {n[1]!r} {n[2]!r}\n"] * a.repeats)
-cmd = [tool("rtrace"), "-I", "-h", "-u+", "-ab", str(a.ab), "-aa", "0", "-ad", str(a.ad), "-as", "0",
+cmd = [tool("rtrace"), "-I", "-h", "-u+", "-n", str(a.processes), "-ab", str(a.ab), "-aa", repr(a.aa),
+       "-ad", str(a.ad), "-as", str(a.ss),
        "-lw", str(a.lw), "-lr", str(-abs(4 * a.ab)), "-dj", "1", "-ds", "0.02", "-dt", "0", "-dc", "1",
        "-ss", "0", "-st", "1", oct_path]
 t0 = time.time()
@@ -79,7 +93,7 @@ if len(vals) != 3 * len(lines):
     sys.exit(f"rtrace returned {len(vals)} numbers for {len(lines)} rays")
 with open(a.out, "w", newline="") as f:
     w = csv.writer(f)
-    w.writerow(["x", "y", "z", "r", "g", "b", "se_r", "se_g", "se_b"])
+    w.writerow(["x", "y", "z", "r", "g", "b"] + ([] if cached else ["se_r", "se_g", "se_b"]))
     for i, r in enumerate(rows):
         rho = [float(r[k]) for k in ("rho_r", "rho_g", "rho_b")]
         e = [float(r[k]) for k in ("e_r", "e_g", "e_b")]
@@ -90,6 +104,6 @@ with open(a.out, "w", newline="") as f:
             var = sum((x - mean) ** 2 for x in h) / max(len(h) - 1, 1)
             b.append(e[c] + rho[c] * mean)
             se.append(rho[c] * math.sqrt(var / len(h)))
-        w.writerow([r["x"], r["y"], r["z"]] + [repr(v) for v in b + se])
+        w.writerow([r["x"], r["y"], r["z"]] + [repr(v) for v in (b if cached else b + se)])
 print(f"radiance: {len(rows)} points x {a.repeats} repeats in {time.time() - t0:.1f} s -> {a.out}")
 print("  " + " ".join(cmd[:-1]))
