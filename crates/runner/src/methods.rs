@@ -346,6 +346,33 @@ pub fn methods() -> Vec<MethodInfo> {
                 balance: 0.0,
             },
         },
+        method!(
+            "radiosity-texture",
+            "Adaptive radiosity textures (Heckbert 1990): particles from the emitters, reflected by Russian \
+             roulette, deposit their power in a quadtree histogram per face (a rex) whose leaves split when \
+             they hold more than split_threshold particles (split = count) and, under split = contrast, only \
+             where the children's densities differ (shadow edges); B = E + rho Phi/(N_e A) per leaf, read at \
+             points as constant, gouraud or final-gather.",
+            radlab_radiosity_texture::RadiosityTextureParams,
+            radlab_radiosity_texture::RadiosityTextureSolver,
+            // 4 runs of 2 passes, 40,000 landings in all, the contrast rule at 64 particles a leaf (so a
+            // uniformly lit face keeps large, less noisy leaves; the count rule's leaves of at most 64
+            // landings are judged as well, by radlab-radiosity-texture's own furnace test). Each leaf's value is
+            // an unbiased estimate of its mean and particle tracing conserves power (every particle is absorbed
+            // somewhere), so the balance is limited by noise only, which the suite adds.
+            TestSettings {
+                params: |_| {
+                    table(&[
+                        ("particles", 40000.into()),
+                        ("passes", 2.into()),
+                        ("split", "contrast".into()),
+                        ("split_threshold", 64.into()),
+                    ])
+                },
+                seeds: 4,
+                balance: 0.0,
+            }
+        ),
     ]
 }
 

@@ -149,6 +149,26 @@ const EXCEPTIONS: &[Exception] = &[
                  non-negative output only",
     },
     Exception {
+        method: "radiosity-texture",
+        case: "sliver (aspect 1e4) in a furnace",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 9.0e-1 against a bound of 9.2e-2 (debug, 2026-12-05): B = E on the sliver in every run. Read by
+        // a final gather over the same leaves (reconstruction = final-gather) it passed: 6.6e-3 against 4.9e-2.
+        reason: "a histogram estimates a leaf from the landings in it: the sliver holds 1e-4 of the furnace's \
+                 area, so of the test-sized 40,000 landings it expects about one per run, and a run with none \
+                 reads B = E; the mean of 4 runs is E/(1 − ρ) only in expectation, with no spread to show it",
+    },
+    Exception {
+        method: "radiosity-texture",
+        case: "fan with a near-zero-area face in a furnace",
+        expect: Expect::Misses,
+        overrides: &[],
+        // Measured 9.0e-1 against 6.3e-2 (debug, 2026-12-05); by a final gather it passed: 8.3e-3 against 3.9e-2.
+        reason: "the fan's tiny triangle holds 5e-9 of the furnace's area and receives no landing at \
+                 test-sized budgets, so it reads B = E (as for the sliver)",
+    },
+    Exception {
         method: "pathtrace",
         case: "furnace cube ρ=0.999",
         expect: Expect::Finite,
