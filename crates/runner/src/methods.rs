@@ -356,14 +356,14 @@ pub fn methods() -> Vec<MethodInfo> {
              or as the per-face histogram. No shadow rays or gathers while solving.",
             radlab_density_estimation::DensityEstimationParams,
             radlab_density_estimation::DensityEstimationSolver,
-            // 4 runs of 2 steps × 20,000 landings, display elements of the case's face size. The balance case
+            // 4 runs of 2 steps × 50,000 landings, display elements of the case's face size. The balance case
             // answers by the histogram (reconstruction = constant): every landing's power is counted on the
             // face it hits and particle tracing absorbs exactly what is emitted, so the balance is unbiased
             // (noise only, which the suite adds).
             TestSettings {
                 params: |h| {
                     table(&[
-                        ("particles", 20000.into()),
+                        ("particles", 50000.into()),
                         ("steps", 2.into()),
                         ("element_size", h.into()),
                     ])
