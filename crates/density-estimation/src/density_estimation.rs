@@ -59,7 +59,10 @@ impl SurfaceParticles {
     fn bytes(&self) -> usize {
         self.points.capacity() * size_of::<[f64; 2]>()
             + self.power.capacity() * size_of::<Rgb>()
-            + self.tree.as_ref().map_or(0, |_| self.points.len() * (16 + 8))
+            + self
+                .tree
+                .as_ref()
+                .map_or(0, |_| self.points.len() * (16 + 8))
     }
 }
 
@@ -288,7 +291,11 @@ impl<'a> DensityEstimationSolver<'a> {
 
     fn bytes(&self) -> u64 {
         (self.surfaces.bytes()
-            + self.particles.iter().map(SurfaceParticles::bytes).sum::<usize>()
+            + self
+                .particles
+                .iter()
+                .map(SurfaceParticles::bytes)
+                .sum::<usize>()
             + self.face_power.capacity() * size_of::<Rgb>()
             + self.mesh.as_ref().map_or(0, ElementMesh::bytes)
             + self
@@ -352,7 +359,8 @@ impl Solution for DensityEstimationSolver<'_> {
         if face >= self.scene.faces.len() {
             return Rgb::splat(f64::NAN);
         }
-        let constant = || self.scene.emission(face) + self.scene.reflectance(face) * self.histogram(face);
+        let constant =
+            || self.scene.emission(face) + self.scene.reflectance(face) * self.histogram(face);
         match (self.params.reconstruction, &self.mesh) {
             (DensityReconstruction::Density, _) => self.density_radiosity(face, point),
             (DensityReconstruction::Constant, _) => constant(),

@@ -386,7 +386,10 @@ mod tests {
         let m = sq.moments(DVec2::ZERO, 0.2);
         assert!((m[0] - 0.25).abs() < 1e-4, "{m:?}");
         let first = 4.0 / (15.0 * std::f64::consts::PI);
-        assert!((m[1] - first).abs() < 1e-4 && (m[2] - first).abs() < 1e-4, "{m:?}");
+        assert!(
+            (m[1] - first).abs() < 1e-4 && (m[2] - first).abs() < 1e-4,
+            "{m:?}"
+        );
         assert!((m[3] - 1.0 / 24.0).abs() < 1e-4, "{m:?}");
         // Same moments from the single quad.
         let q = unit_square().moments(DVec2::ZERO, 0.2);
@@ -409,7 +412,13 @@ mod tests {
     }
 
     /// The estimate and its standard error (the estimate is a mean of n i.i.d. terms).
-    fn estimate_se(d: &Domain, x: DVec2, h: f64, c: BoundaryCorrection, pts: &[DVec2]) -> (f64, f64) {
+    fn estimate_se(
+        d: &Domain,
+        x: DVec2,
+        h: f64,
+        c: BoundaryCorrection,
+        pts: &[DVec2],
+    ) -> (f64, f64) {
         let n = pts.len() as f64;
         let l = d.weights(x, h, c).expect("weights");
         let terms: Vec<f64> = pts
@@ -435,15 +444,25 @@ mod tests {
         for (x, y) in PROBES {
             let x = DVec2::new(x, y);
             let (f, se) = estimate_se(&d, x, h, BoundaryCorrection::LocalLinear, &pts);
-            assert!((f - 1.0).abs() < 4.0 * se, "local linear at {x}: {f} ± {se}");
-            let g = estimate(&d, x, h, BoundaryCorrection::LocalLinear, &pts, &w).expect("estimate");
+            assert!(
+                (f - 1.0).abs() < 4.0 * se,
+                "local linear at {x}: {f} ± {se}"
+            );
+            let g =
+                estimate(&d, x, h, BoundaryCorrection::LocalLinear, &pts, &w).expect("estimate");
             assert!((f - g).abs() < 1e-12);
             let (p, se) = estimate_se(&d, x, h, BoundaryCorrection::None, &pts);
             // The plain kernel: the share of the disc inside the square (1, 1/2 on an edge, 1/4 at a corner).
             let share = d.moments(x, h)[0];
-            assert!((p - share).abs() < 4.0 * se, "plain at {x}: {p} ± {se}, share {share}");
+            assert!(
+                (p - share).abs() < 4.0 * se,
+                "plain at {x}: {p} ± {se}, share {share}"
+            );
             if share < 0.9 {
-                assert!((p - 1.0).abs() > 10.0 * se, "the plain kernel must fail at {x}: {p}");
+                assert!(
+                    (p - 1.0).abs() > 10.0 * se,
+                    "the plain kernel must fail at {x}: {p}"
+                );
             }
         }
     }
@@ -458,15 +477,25 @@ mod tests {
         for (x, y) in PROBES {
             let x = DVec2::new(x, y);
             let (ll, se) = estimate_se(&d, x, h, BoundaryCorrection::LocalLinear, &pts);
-            assert!((ll - f(x)).abs() < 4.0 * se, "local linear at {x}: {ll} ± {se}, exact {}", f(x));
+            assert!(
+                (ll - f(x)).abs() < 4.0 * se,
+                "local linear at {x}: {ll} ± {se}, exact {}",
+                f(x)
+            );
             // Renormalising is exact for flat densities only: where the kernel's mass inside the square is
             // off-centre in x (the x = 0 and x = 1 edges, corners) its bias is ∂f/∂x · h · M₀₁/M₀₀.
             let (rn, se) = estimate_se(&d, x, h, BoundaryCorrection::Renormalized, &pts);
             let m = d.moments(x, h);
             let expected = f(x) + 1.0 * h * m[1] / m[0]; // E = ∫K̃ f(x + hξ)/M₀₀ with ∂f/∂x = 1
-            assert!((rn - expected).abs() < 4.0 * se, "renormalised at {x}: {rn} vs {expected}");
+            assert!(
+                (rn - expected).abs() < 4.0 * se,
+                "renormalised at {x}: {rn} vs {expected}"
+            );
             if m[1].abs() > 0.05 {
-                assert!((rn - f(x)).abs() > 4.0 * se, "renormalised must be biased at {x}");
+                assert!(
+                    (rn - f(x)).abs() > 4.0 * se,
+                    "renormalised must be biased at {x}"
+                );
             }
         }
     }
@@ -475,13 +504,17 @@ mod tests {
     fn bias_factor_inside_is_a_sixth() {
         let d = split_square();
         let x = DVec2::new(0.5, 0.5);
-        let l = d.weights(x, 0.2, BoundaryCorrection::LocalLinear).expect("w");
+        let l = d
+            .weights(x, 0.2, BoundaryCorrection::LocalLinear)
+            .expect("w");
         assert!((l - DVec3::X).length() < 1e-12);
         // Inside: ∫K̃|ξ|² = 1/3 (1/6 per axis); computed with the disc polygon, so to its accuracy.
         let b = d.bias_factor(x, 0.2, l);
         assert!((b - 1.0 / 3.0).abs() < 1e-3, "{b}");
         // At a corner the weights change sign: the factor exceeds the interior's.
-        let l = d.weights(DVec2::ZERO, 0.2, BoundaryCorrection::LocalLinear).expect("w");
+        let l = d
+            .weights(DVec2::ZERO, 0.2, BoundaryCorrection::LocalLinear)
+            .expect("w");
         assert!(d.bias_factor(DVec2::ZERO, 0.2, l) > 1.0 / 3.0);
     }
 }

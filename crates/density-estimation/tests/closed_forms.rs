@@ -51,7 +51,7 @@ fn furnace_to_the_edges_and_corners() {
                 let near = p
                     .to_array()
                     .iter()
-                    .filter(|&&c| c < 0.01 || c > 0.99)
+                    .filter(|&&c| !(0.01..=0.99).contains(&c))
                     .count();
                 // One coordinate is the side's plane.
                 probes.push((f, p, near - 1));
@@ -87,13 +87,19 @@ fn furnace_to_the_edges_and_corners() {
                 // Unbiased for a flat density up to the boundary: only noise (t with 5 degrees of freedom:
                 // |t| > 4.5 has probability 0.6 %).
                 BoundaryCorrection::LocalLinear => {
-                    assert!(dev < 4.5 * se, "local linear, {name}: {m} ± {se}, exact {exact}")
+                    assert!(
+                        dev < 4.5 * se,
+                        "local linear, {name}: {m} ± {se}, exact {exact}"
+                    )
                 }
                 // The plain kernel loses the part of its disc outside the side: B = E + ρ H/2 on an edge,
                 // E + ρ H/4 in a corner.
                 _ if c > 0 => {
                     let expected = 1.0 + rho * exact * [1.0, 0.5, 0.25][c];
-                    assert!(dev > 10.0 * se, "the plain kernel must fail at the {name}: {m} ± {se}");
+                    assert!(
+                        dev > 10.0 * se,
+                        "the plain kernel must fail at the {name}: {m} ± {se}"
+                    );
                     assert!(
                         (m - expected).abs() < 4.5 * se + 0.02 * exact,
                         "plain kernel, {name}: {m} ± {se}, expected about {expected}"
@@ -120,9 +126,10 @@ fn max_hessian(field: &impl Fn(DVec3) -> f64, x: DVec3, t1: DVec3, t2: DVec3, h:
             let f0 = field(p);
             let fxx = (field(p + d * t1) - 2.0 * f0 + field(p - d * t1)) / (d * d);
             let fyy = (field(p + d * t2) - 2.0 * f0 + field(p - d * t2)) / (d * d);
-            let fxy = (field(p + d * (t1 + t2)) - field(p + d * (t1 - t2)) - field(p - d * (t1 - t2))
-                + field(p - d * (t1 + t2)))
-                / (4.0 * d * d);
+            let fxy =
+                (field(p + d * (t1 + t2)) - field(p + d * (t1 - t2)) - field(p - d * (t1 - t2))
+                    + field(p - d * (t1 + t2)))
+                    / (4.0 * d * d);
             let tr = (fxx + fyy) / 2.0;
             let disc = (((fxx - fyy) / 2.0).powi(2) + fxy * fxy).sqrt();
             worst = worst.max(tr.abs() + disc);
@@ -179,12 +186,20 @@ fn lambert_on_parallel_plates_within_the_bias_bound() {
                 .weights(x, h, BoundaryCorrection::LocalLinear)
                 .expect("weights");
             let (t1, t2) = radlab_scene::sampling::basis(n);
-            let b = rho * 0.5 * h * h * surface.domain.bias_factor(x, h, l)
+            let b = rho
+                * 0.5
+                * h
+                * h
+                * surface.domain.bias_factor(x, h, l)
                 * max_hessian(&field, p, t1, t2, h);
             bound[k] = bound[k].max(b);
         }
     }
-    assert!(receiver.iter().all(|&f| s_same_surface(&scene, receiver[0], f)));
+    assert!(
+        receiver
+            .iter()
+            .all(|&f| s_same_surface(&scene, receiver[0], f))
+    );
     let (mut err, mut allowed, mut total) = (0.0, 0.0, 0.0);
     for (k, &(_, p)) in probes.iter().enumerate() {
         let (m, se) = mean_se(&runs[k]);
