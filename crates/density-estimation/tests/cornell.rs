@@ -39,7 +39,6 @@ fn bumpy_sphere_is_estimated_over_groups_of_faces() {
 }
 
 fn agrees_with_the_path_tracer(scene: &Scene) {
-    let scene = scene;
     let accel = Accel::new(scene);
     let pts: Vec<SurfacePoint> = evaluation_points(scene, 128, 3)
         .iter()
