@@ -221,3 +221,48 @@ fn s_same_surface(scene: &Scene, a: FaceId, b: FaceId) -> bool {
     let s = radlab_density_estimation::surfaces::Surfaces::new(scene, 0.9);
     s.of_face[a] == s.of_face[b]
 }
+
+#[test]
+fn furnace_through_the_display_mesh_and_the_final_gather() {
+    use radlab_density_estimation::DensityReconstruction;
+    use radlab_method::Solution;
+    let rho = 0.5;
+    let exact = 1.0 / (1.0 - rho);
+    let scene = builtin(&format!("furnace-cube?reflectance={rho}&tessellation=2")).expect("cube");
+    let accel = Accel::new(&scene);
+    let probes: Vec<(FaceId, DVec3)> = (0..scene.face_count())
+        .flat_map(|f| {
+            let poly = scene.polygon(f);
+            [0.01, 0.5, 0.99]
+                .into_iter()
+                .flat_map(move |s| [0.01, 0.5, 0.99].map(|t| (f, poly.point_at(s, t))))
+        })
+        .collect();
+    for reconstruction in [
+        DensityReconstruction::Mesh,
+        DensityReconstruction::FinalGather,
+    ] {
+        let params = DensityEstimationParams {
+            particles: 40_000,
+            steps: 2,
+            reconstruction,
+            element_size: Some(0.25),
+            ..Default::default()
+        };
+        let means: Vec<f64> = (1..=SEEDS)
+            .map(|seed| {
+                let s = solve(&scene, &accel, &params, seed);
+                probes
+                    .iter()
+                    .map(|&(f, p)| s.radiosity_at(f, p).x)
+                    .sum::<f64>()
+                    / probes.len() as f64
+            })
+            .collect();
+        let (m, se) = mean_se(&means);
+        assert!(
+            (m - exact).abs() < 4.5 * se,
+            "{reconstruction:?}: {m} ± {se}, exact {exact}"
+        );
+    }
+}
