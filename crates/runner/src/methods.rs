@@ -373,6 +373,32 @@ pub fn methods() -> Vec<MethodInfo> {
                 balance: 0.0,
             }
         ),
+        method!(
+            "density-estimation",
+            "Density estimation (Shirley, Wade, Hubbard, Zareski, Walter & Greenberg 1995; Walter, Hubbard, \
+             Shirley & Greenberg 1997): particles from the emitters with Russian roulette, every landing kept \
+             per surface (edge-connected faces of one material within a normal cone), irradiance by an \
+             Epanechnikov kernel estimate in the surface's plane with local linear boundary correction, \
+             bandwidth c sqrt(A) n^(-1/6); answers at the point, over a Gouraud display mesh, by final gather \
+             or as the per-face histogram. No shadow rays or gathers while solving.",
+            radlab_density_estimation::DensityEstimationParams,
+            radlab_density_estimation::DensityEstimationSolver,
+            // 4 runs of 2 steps × 50,000 landings, display elements of the case's face size. The balance case
+            // answers by the histogram (reconstruction = constant): every landing's power is counted on the
+            // face it hits and particle tracing absorbs exactly what is emitted, so the balance is unbiased
+            // (noise only, which the suite adds).
+            TestSettings {
+                params: |h| {
+                    table(&[
+                        ("particles", 50000.into()),
+                        ("steps", 2.into()),
+                        ("element_size", h.into()),
+                    ])
+                },
+                seeds: 4,
+                balance: 0.0,
+            }
+        ),
     ]
 }
 
