@@ -344,7 +344,12 @@ pub fn redraw(out: &Path, name: &str, description: &str, plots_on: bool) -> Resu
                 figs.push(relative(out, &diff));
                 tiles.push((
                     label.to_string(),
-                    format!("L1 {:.1e}; image {:.0}%", best.l1, mean * 100.0),
+                    format!(
+                        "L1 {:.1e}, {}, img {:.0}%",
+                        best.l1,
+                        short_seconds(best.setup_s + best.wall_s + best.answer_s),
+                        mean * 100.0
+                    ),
                     img,
                 ));
             }
@@ -453,4 +458,13 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<()> {
     finish(out, &cfg)?;
     println!("merged {} directories into {}", dirs.len(), out.display());
     Ok(())
+}
+
+/// Seconds in at most four characters and a unit, for an image's label: "0.77 s", "12 s", "340 s".
+fn short_seconds(s: f64) -> String {
+    if s < 10.0 {
+        format!("{s:.2} s")
+    } else {
+        format!("{s:.0} s")
+    }
 }
