@@ -126,6 +126,7 @@ mod patch_transport;
 mod push_pull;
 mod refine;
 mod schedule;
+mod shooting;
 mod solver;
 pub mod transport;
 
@@ -140,6 +141,7 @@ pub use params::{
 };
 pub use patch_transport::{PatchKernel, reflect_scalar};
 pub use push_pull::LinkFilter;
+pub use shooting::{LinkCache, SHOOT_SHARE};
 pub use solver::HierarchicalSolver;
 pub use transport::{
     GatherAt, LinearState, LinkError, LinkPayload, NodeView, SourceFlux, SourceLight, Transport,
