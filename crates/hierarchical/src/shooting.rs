@@ -55,6 +55,10 @@ use crate::transport::{GatherAt, LinearState, LinkPayload, SourceLight, Transpor
 /// A root shoots in a sweep when its unshot power is at least this share of the largest root's.
 pub const SHOOT_SHARE: f64 = 0.1;
 
+/// Kept links whose coefficients are computed and delivered together (one chunk's coefficients are the
+/// transient memory of a shot's delivery, besides its kept links).
+const DELIVERY_CHUNK: usize = 64;
+
 /// Bytes a cache entry costs beyond its link and coefficients (key in the map and in the recency order).
 const ENTRY_OVERHEAD: usize = 48;
 
@@ -649,45 +653,49 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         dh: &mut [Vec<T::Irradiance>; 2],
         now: u64,
     ) {
-        let delivered: Vec<Delivery<T::Coefficient>> = held
-            .par_iter()
-            .map(|&((r, s), ref l)| {
-                let cached = self
-                    .shooting
-                    .as_ref()
-                    .and_then(|st| st.cache.as_ref())
-                    .and_then(|c| c.get((r, s)));
-                self.targets_of(r, s, l, cached.map(|e| e.coefficients.as_slice()))
-            })
-            .collect();
-        let view = self.view();
-        for (((r, _), l), (coeffs, _, _)) in held.iter().zip(&delivered) {
-            if l.overlap() {
-                continue;
+        // In chunks of links, so that one chunk's coefficients are held at a time (the order of delivery, and
+        // so every sum, is the same as in one piece).
+        for chunk in held.chunks(DELIVERY_CHUNK) {
+            let delivered: Vec<Delivery<T::Coefficient>> = chunk
+                .par_iter()
+                .map(|&((r, s), ref l)| {
+                    let cached = self
+                        .shooting
+                        .as_ref()
+                        .and_then(|st| st.cache.as_ref())
+                        .and_then(|c| c.get((r, s)));
+                    self.targets_of(r, s, l, cached.map(|e| e.coefficients.as_slice()))
+                })
+                .collect();
+            let view = self.view();
+            for (((r, _), l), (coeffs, _, _)) in chunk.iter().zip(&delivered) {
+                if l.overlap() {
+                    continue;
+                }
+                let flux = self.kernel.emit(&view, rb, rx, *r, l);
+                let flux_u = self.kernel.emit(&view, ub, ux, *r, l);
+                for (t, c) in coeffs {
+                    self.kernel.deliver(&mut dh[0][*t as usize], c, flux);
+                    self.kernel.deliver(&mut dh[1][*t as usize], c, flux_u);
+                }
             }
-            let flux = self.kernel.emit(&view, rb, rx, *r, l);
-            let flux_u = self.kernel.emit(&view, ub, ux, *r, l);
-            for (t, c) in coeffs {
-                self.kernel.deliver(&mut dh[0][*t as usize], c, flux);
-                self.kernel.deliver(&mut dh[1][*t as usize], c, flux_u);
-            }
-        }
-        let evaluations: u64 = delivered.iter().map(|d| d.1).sum();
-        self.form_factors += evaluations;
-        let coefficient_bytes: usize = delivered
-            .iter()
-            .map(|(c, _, _)| c.len() * size_of::<(u32, T::Coefficient)>())
-            .sum();
-        let st = self.shooting.as_mut().expect("linkless");
-        st.peak_transient = st
-            .peak_transient
-            .max(held.len() * size_of::<T::Link>() + coefficient_bytes);
-        if let Some(cache) = st.cache.as_mut() {
-            for ((key, l), (c, _, changed)) in held.iter().zip(delivered) {
-                if changed {
-                    cache.insert(*key, l.clone(), c, now);
-                } else {
-                    cache.touch(*key, now);
+            let evaluations: u64 = delivered.iter().map(|d| d.1).sum();
+            self.form_factors += evaluations;
+            let coefficient_bytes: usize = delivered
+                .iter()
+                .map(|(c, _, _)| c.len() * size_of::<(u32, T::Coefficient)>())
+                .sum();
+            let st = self.shooting.as_mut().expect("linkless");
+            st.peak_transient = st
+                .peak_transient
+                .max(held.len() * size_of::<T::Link>() + coefficient_bytes);
+            if let Some(cache) = st.cache.as_mut() {
+                for ((key, l), (c, _, changed)) in chunk.iter().zip(delivered) {
+                    if changed {
+                        cache.insert(*key, l.clone(), c, now);
+                    } else {
+                        cache.touch(*key, now);
+                    }
                 }
             }
         }

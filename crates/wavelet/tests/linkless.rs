@@ -244,3 +244,32 @@ fn the_link_cache_changes_no_number() {
     );
     assert!(b.rays < a.rays, "{} vs {}", b.rays, a.rays);
 }
+
+/// Shooting is deterministic for any thread count: links are computed in parallel but applied in a fixed
+/// order, so one thread and three give the same leaves and answers bit for bit.
+#[test]
+fn shooting_does_not_depend_on_the_thread_count() {
+    let scene = room("room", &|_| {});
+    let accel = Accel::new(&scene);
+    let pts = points(&scene);
+    let params = WaveletParams {
+        basis: Basis::M2,
+        epsilon: 0.05,
+        min_element_size: Some(0.05),
+        linkless: true,
+        link_cache_mib: 1.0,
+        ..WaveletParams::default()
+    };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            let s = solve(&scene, &accel, params.clone());
+            let answers: Vec<Rgb> = pts.iter().map(|&(f, p)| s.radiosity_at(f, p)).collect();
+            (s.leaves(), answers, s.stats().form_factors)
+        })
+    };
+    assert_eq!(run(1), run(3));
+}
