@@ -74,9 +74,9 @@ pub struct WaveletParams {
     /// Memory the elements and links may take, MiB; a refinement beyond it is refused.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
-    /// Shoot unshot radiosity without storing links (Stamminger et al. 1998): each step shoots the faces
-    /// holding the most unshot power, refining each shot's links with the same oracle and epsilon, then
-    /// dropping them. The schedule is then not used.
+    /// Shoot unshot radiosity without storing links (Stamminger et al. 1998): each step is a sweep over the
+    /// faces that are lit or hold at least a tenth of the largest unshot power, each shot refining its links
+    /// with the same oracle and epsilon, then dropping them. The schedule is then not used.
     pub linkless: bool,
     /// Linkless only: a cache of computed links (tensors and their leaf coefficients) of at most this
     /// many MiB, least recently used evicted; 0 = no cache. Results are identical with or without it.
