@@ -16,6 +16,7 @@ use radlab_scene::{FaceId, Rgb};
 
 use crate::node::NodeKind;
 use crate::params::HierarchicalParams;
+use crate::shooting::ShootState;
 use crate::transport::{NodeView, Transport};
 
 /// One cached gather entry of a target: the link (receiver node, index in its links) and its coefficient.
@@ -155,6 +156,8 @@ where
     pub(crate) kernel: T,
     pub(crate) params: HierarchicalParams,
     pub(crate) min_size: f64,
+    /// Linkless shooting's state, when the engine shoots instead of storing links ([`Engine::set_linkless`]).
+    pub(crate) shooting: Option<ShootState<T::Irradiance, T::Link, T::Coefficient>>,
     // Counters.
     pub(crate) steps: u64,
     pub(crate) form_factors: u64,
@@ -228,6 +231,7 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             kernel,
             params,
             min_size,
+            shooting: None,
             steps: 0,
             form_factors: 0,
         };
@@ -405,7 +409,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         self.solve.residual
     }
 
-    /// Bytes held by nodes, links and per-node state.
+    /// Bytes held by nodes, links and per-node state; when shooting without links, also the shooting state,
+    /// the link cache and the peak bytes of one refinement level's transient links.
     pub fn bytes(&self) -> u64 {
         let per_node = Self::node_bytes();
         let links: usize = self.links.by_receiver.iter().map(|l| l.capacity()).sum();
@@ -437,7 +442,8 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             + row_sources * 4
             + gains * size_of::<f64>()
             + self.cache.row_sources.capacity() * size_of::<Vec<u32>>()
-            + rows * size_of::<RowEntry<T::Coefficient>>()) as u64
+            + rows * size_of::<RowEntry<T::Coefficient>>()
+            + self.shooting_bytes()) as u64
     }
 
     /// What one node holds in the engine's per-node arrays, its links, rows and source rows apart.

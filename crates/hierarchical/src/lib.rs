@@ -112,6 +112,14 @@
 //! [`PatchKernel`]) plus the shared output layer ([`SurfaceOutput`]); radlab-volume-cluster supplies cluster
 //! nodes and three cluster transfers, starts the engine from one root self-link ([`Engine::add_link`]) and
 //! reuses the same refinement, gather, schedules and output.
+//!
+//! ## Linkless shooting
+//! [`Engine::set_linkless`] switches an engine to shooting without stored links (Stamminger, Schirmacher,
+//! Slusallek & Seidel 1998; the `shooting` module): each step is a sweep over the roots shooting their unshot
+//! radiosity, each shot refining its links top down with the same oracle and ε, delivering through them and
+//! dropping them, with an optional bounded link cache ([`LinkCache`]) and the coarse correction sent through
+//! the same links. radlab-wavelet exposes it (`linkless`, `link_cache_mib`); this crate's patch solver does
+//! not yet: its links weigh their source's leaves, which the shots do not.
 
 mod gather_rows;
 mod hierarchy;
@@ -126,6 +134,7 @@ mod patch_transport;
 mod push_pull;
 mod refine;
 mod schedule;
+mod shooting;
 mod solver;
 pub mod transport;
 
@@ -140,6 +149,7 @@ pub use params::{
 };
 pub use patch_transport::{PatchKernel, reflect_scalar};
 pub use push_pull::LinkFilter;
+pub use shooting::{LinkCache, SHOOT_SHARE};
 pub use solver::HierarchicalSolver;
 pub use transport::{
     GatherAt, LinearState, LinkError, LinkPayload, NodeView, SourceFlux, SourceLight, Transport,

@@ -56,6 +56,14 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             return Ok(Step::Capped);
         }
         self.steps += 1;
+        if self.shooting.is_some() {
+            self.shoot_sweep()?;
+            if self.solve.converged {
+                self.schedule.phase = Phase::Done;
+                return Ok(Step::Converged);
+            }
+            return Ok(Step::Continue);
+        }
         let lazy = self.lazy();
         loop {
             match (self.params.schedule, self.schedule.phase) {

@@ -153,7 +153,8 @@ pub fn methods() -> Vec<MethodInfo> {
             "Wavelet radiosity (Gortler, Schroder, Cohen & Hanrahan 1993): hierarchical radiosity with M^2 \
              coefficients per element (basis = haar | f2 | f3 | m2 | m3) and M^4 per link by Gauss quadrature, \
              visibility per pair of quadrature nodes or per link, Bekaert & Willems's oracle; answers from the \
-             basis itself, smoothed, or by a final gather.",
+             basis itself, smoothed, or by a final gather. linkless = true shoots unshot radiosity without storing \
+             links (Stamminger et al. 1998), with an optional bounded link cache (link_cache_mib).",
             radlab_wavelet::WaveletParams,
             radlab_wavelet::WaveletSolver,
             // M2 with the F oracle at ε = 0.02, leaves no smaller than a quarter of an input face, the

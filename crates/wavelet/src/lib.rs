@@ -23,6 +23,8 @@
 //! | `schedule` | `scheduled` | as for hierarchical radiosity |
 //! | `reconstruction` | `basis` | `basis` (the leaf's functions), `smoothed` (vertex-averaged means), `final-gather` |
 //! | `tolerance`, `max_steps`, `memory_budget_mib` | 1e-4, 100000, 4096 | as for hierarchical radiosity |
+//! | `linkless` | false | shoot unshot radiosity without storing links (Stamminger, Schirmacher, Slusallek & Seidel 1998; the engine's `set_linkless`); `schedule` is then not used |
+//! | `link_cache_mib` | 0 | linkless only: a least-recently-used cache of computed links (tensors and leaf coefficients) of at most this many MiB; 0 = none; results bit-identical with and without |
 //!
 //! ## Triangles and other non-parallelogram faces
 //! The tensor functions are orthonormal under an element's area mean only where its parameter map has a
@@ -42,9 +44,21 @@
 //! twice (the link and the engine's gather row) and M² per element and channel for radiosity, exitance and
 //! irradiance.
 //!
+//! ## Linkless
+//! With `linkless = true` each step is a sweep that shoots the faces' unshot coefficients; each shot refines
+//! its links top down with the same oracle and ε, delivers through them at the leaves and drops them
+//! (radlab-hierarchical's `shooting` module: the invariant, the coarse correction through the same links, the
+//! cache). Memory is the elements' coefficients, the shooting state, the cache and the largest set of links
+//! one shot held at once; every link is computed again (kernel evaluations and rays counted again) at every
+//! shot that needs it unless the cache holds it. [`radlab_method::Solver::counters`] reports shots, sweeps,
+//! corrections, transient links, cache hits, misses and evictions and the peak transient bytes.
+//!
 //! ## Not done
-//! Light leaks at contacts are not corrected (no open shares, unlike hierarchical radiosity); linkless
-//! shooting (Stamminger et al. 1998) is not implemented.
+//! Light leaks at contacts are not corrected (no open shares, unlike hierarchical radiosity). Linkless: an
+//! element split after it received light keeps that light as its parent's, pushed (the receiver gather's
+//! approximation), where the linked leaf gather re-integrates every link at the new leaves, so the two differ
+//! by about ε (tests/linkless.rs) and a furnace refined at mixed levels is off by up to a few 1e-3 at
+//! ρ = 0.999 (0.24% measured with Haar, ε = 0.05 under the F oracle, elements down to an eighth of a side).
 
 pub mod basis;
 pub mod link_tensor;

@@ -74,6 +74,14 @@ pub struct WaveletParams {
     /// Memory the elements and links may take, MiB; a refinement beyond it is refused.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
+    /// Shoot unshot radiosity without storing links (Stamminger et al. 1998): each step is a sweep over the
+    /// faces that are lit or hold at least a tenth of the largest unshot power, each shot refining its links
+    /// with the same oracle and epsilon, then dropping them. The schedule is then not used.
+    pub linkless: bool,
+    /// Linkless only: a cache of computed links (tensors and their leaf coefficients) of at most this
+    /// many MiB, least recently used evicted; 0 = no cache. Results are identical with or without it.
+    #[schemars(range(min = 0))]
+    pub link_cache_mib: f64,
 }
 
 impl Default for WaveletParams {
@@ -91,6 +99,8 @@ impl Default for WaveletParams {
             tolerance: 1e-4,
             max_steps: 100_000,
             memory_budget_mib: 4096.0,
+            linkless: false,
+            link_cache_mib: 0.0,
         }
     }
 }
@@ -108,11 +118,22 @@ impl MethodParams for WaveletParams {
                 ),
             ));
         }
+        if self.link_cache_mib > 0.0 && !self.linkless {
+            return Err(SolveError::param(
+                "link_cache_mib",
+                "the link cache serves linkless shooting only; set linkless = true or link_cache_mib = 0",
+            ));
+        }
         Ok(())
     }
 }
 
 impl WaveletParams {
+    /// The link cache's bound in bytes (0: none).
+    pub fn link_cache_bytes(&self) -> usize {
+        (self.link_cache_mib * 1024.0 * 1024.0).clamp(0.0, usize::MAX as f64) as usize
+    }
+
     /// Gauss points per cell and side: the parameter or the basis' default.
     pub fn points(&self) -> usize {
         self.quadrature
@@ -172,6 +193,8 @@ mod tests {
             ("oracle", "guess"),
             ("reconstruction", "linear"),
             ("gather", "link"),
+            ("linkless", "maybe"),
+            ("link_cache_mib", "-1"),
         ] {
             let e = WaveletParams::from_pairs(&[(k.to_string(), v.to_string())])
                 .expect_err("rejected")
@@ -194,5 +217,12 @@ mod tests {
         assert_eq!(p.basis, Basis::F3);
         assert_eq!(p.visibility, Visibility::PerLink);
         assert_eq!(p.points(), 1);
+        let e = WaveletParams::from_pairs(&[("link_cache_mib".to_string(), "8".to_string())])
+            .expect_err("a cache without linkless")
+            .to_string();
+        assert!(
+            e.contains("link_cache_mib") && e.contains("linkless"),
+            "{e}"
+        );
     }
 }

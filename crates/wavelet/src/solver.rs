@@ -79,9 +79,11 @@ fn run<'a, const K: usize>(
         params.gather,
         seed,
     );
-    Ok(Run {
-        engine: Engine::new(roots, transport, hp, min_size)?,
-    })
+    let mut engine = Engine::new(roots, transport, hp, min_size)?;
+    if params.linkless {
+        engine.set_linkless(params.link_cache_bytes());
+    }
+    Ok(Run { engine })
 }
 
 impl<'a> WaveletSolver<'a> {
@@ -162,5 +164,10 @@ impl Solver for WaveletSolver<'_> {
 
     fn stats(&self) -> Stats {
         with_engine!(&self.engines, e => e.stats(self.rays, self.output.bytes()))
+    }
+
+    /// Linkless shooting's counters (shots, sweeps, link cache hits and misses, …); none when linked.
+    fn counters(&self) -> Vec<(&'static str, u64)> {
+        with_engine!(&self.engines, e => e.shooting_counters())
     }
 }
