@@ -10,6 +10,7 @@ use radlab_density_estimation::{
 use radlab_kernels::form_factor::point_polygon;
 use radlab_method::{Solver, Step};
 use radlab_scene::{FaceId, Scene, builtin};
+use radlab_testkit::mean_se;
 use radlab_visibility::Accel;
 
 /// Solves to convergence and returns the solver.
@@ -22,14 +23,6 @@ fn solve<'a>(
     let mut s = DensityEstimationSolver::new(scene, accel, params.clone(), seed).expect("build");
     while s.step().expect("step") == Step::Continue {}
     s
-}
-
-/// Mean and standard error of the mean of per-run values.
-fn mean_se(v: &[f64]) -> (f64, f64) {
-    let k = v.len() as f64;
-    let m = v.iter().sum::<f64>() / k;
-    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
-    (m, (var / k).sqrt())
 }
 
 const SEEDS: u64 = 6;

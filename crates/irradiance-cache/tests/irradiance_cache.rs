@@ -8,7 +8,7 @@ use radlab_method::{MethodParams, Solver, Step, evaluation_points};
 use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
 use radlab_scene::glam::{DVec3, dvec3};
 use radlab_scene::{Rgb, Scene, builtin};
-use radlab_testkit::two_rooms;
+use radlab_testkit::{ChannelMeans, mean_se, two_rooms};
 use radlab_visibility::Accel;
 
 fn points(scene: &Scene, n: usize, seed: u64) -> Vec<SurfacePoint> {
@@ -38,14 +38,6 @@ fn run(
         .map(|p| s.solution().radiosity_at(p.face, p.point))
         .collect();
     (b, s.counts().records)
-}
-
-/// Mean and standard error of per-run means.
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let k = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / k;
-    let var = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
-    (m, (var / k).sqrt())
 }
 
 fn small(accuracy: f64, samples: u32) -> IrradianceCacheParams {
@@ -112,28 +104,22 @@ fn agrees_with_the_path_tracer_on_the_cornell_box() {
     let runs: Vec<(Vec<Rgb>, u64)> = (1..=4)
         .map(|seed| run(&scene, &accel, &params, seed, &pts))
         .collect();
+    let answers: Vec<Vec<Rgb>> = runs.iter().map(|r| r.0.clone()).collect();
+    let estimates: Vec<(Rgb, Rgb)> = reference.iter().map(|e| (e.mean, e.std_error)).collect();
     for c in 0..3 {
-        let ref_mean = reference.iter().map(|e| e.mean[c]).sum::<f64>() / n;
-        let ref_se = reference
-            .iter()
-            .map(|e| e.std_error[c].powi(2))
-            .sum::<f64>()
-            .sqrt()
-            / n;
-        let (m, se) = mean_se(
-            &runs
-                .iter()
-                .map(|r| r.0.iter().map(|b| b[c]).sum::<f64>() / n)
-                .collect::<Vec<_>>(),
-        );
-        let tol = 4.0 * (se * se + ref_se * ref_se).sqrt();
+        let m = ChannelMeans::new(&estimates, &answers, c);
         eprintln!(
-            "channel {c}: cache {m:.5} ± {se:.5}, path tracing {ref_mean:.5} ± {ref_se:.5}, records {:?}",
+            "channel {c}: cache {:.5} ± {:.5}, path tracing {:.5} ± {:.5}, records {:?}",
+            m.mean,
+            m.se,
+            m.reference,
+            m.reference_se,
             runs.iter().map(|r| r.1).collect::<Vec<_>>()
         );
         assert!(
-            (m - ref_mean).abs() <= tol,
-            "channel {c}: {m} vs {ref_mean} (tolerance {tol})"
+            m.agrees(0.0, 4.0),
+            "channel {c}: {m:?} (tolerance {})",
+            m.tolerance(0.0, 4.0)
         );
         // Per point: relative L1 error of one run against the reference.
         let l1: f64 = runs[0]
@@ -142,7 +128,7 @@ fn agrees_with_the_path_tracer_on_the_cornell_box() {
             .zip(&reference)
             .map(|(b, e)| (b[c] - e.mean[c]).abs())
             .sum::<f64>()
-            / (ref_mean * n);
+            / (m.reference * n);
         eprintln!("channel {c}: relative L1 of one run {l1:.4}");
     }
 }

@@ -14,7 +14,7 @@ use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
 use radlab_photon_map::{PhotonMapParams, PhotonMapSolver, PhotonMode};
 use radlab_scene::glam::dvec3;
 use radlab_scene::{Rgb, Scene, builtin};
-use radlab_testkit::two_rooms;
+use radlab_testkit::{ChannelMeans, mean_se, two_rooms};
 use radlab_visibility::Accel;
 
 fn points(scene: &Scene, n: usize, seed: u64) -> Vec<SurfacePoint> {
@@ -41,13 +41,6 @@ fn run(
     pts.iter()
         .map(|p| s.solution().radiosity_at(p.face, p.point))
         .collect()
-}
-
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let k = xs.len() as f64;
-    let m = xs.iter().sum::<f64>() / k;
-    let var = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
-    (m, (var / k).sqrt())
 }
 
 fn final_gather(photons: u64) -> PhotonMapParams {
@@ -130,7 +123,7 @@ fn agrees_with_the_path_tracer_on_the_cornell_box() {
         },
         99,
     );
-    let n = pts.len() as f64;
+    let reference: Vec<(Rgb, Rgb)> = reference.iter().map(|e| (e.mean, e.std_error)).collect();
     for (name, params) in [
         ("final gather", final_gather(50_000)),
         ("progressive", progressive(20_000, 8)),
@@ -139,28 +132,16 @@ fn agrees_with_the_path_tracer_on_the_cornell_box() {
             .map(|seed| run(&scene, &accel, &params, seed, &pts))
             .collect();
         for c in 0..3 {
-            let ref_mean = reference.iter().map(|e| e.mean[c]).sum::<f64>() / n;
-            let ref_se = reference
-                .iter()
-                .map(|e| e.std_error[c].powi(2))
-                .sum::<f64>()
-                .sqrt()
-                / n;
-            let (m, se) = mean_se(
-                &runs
-                    .iter()
-                    .map(|r| r.iter().map(|b| b[c]).sum::<f64>() / n)
-                    .collect::<Vec<_>>(),
-            );
+            let m = ChannelMeans::new(&reference, &runs, c);
             eprintln!(
-                "{name} channel {c}: {m:.5} ± {se:.5} vs path tracing {ref_mean:.5} ± {ref_se:.5}: {:+.4}",
-                m / ref_mean - 1.0
+                "{name} channel {c}: {:.5} ± {:.5} vs path tracing {:.5} ± {:.5}: {:+.4}",
+                m.mean,
+                m.se,
+                m.reference,
+                m.reference_se,
+                m.mean / m.reference - 1.0
             );
-            let tol = 0.03 * ref_mean + 4.0 * (se * se + ref_se * ref_se).sqrt();
-            assert!(
-                (m - ref_mean).abs() <= tol,
-                "{name} channel {c}: {m} vs {ref_mean}"
-            );
+            assert!(m.agrees(0.03, 4.0), "{name} channel {c}: {m:?}");
         }
     }
 }

@@ -3,8 +3,9 @@
 //! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
 //! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
 //! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, and a scene
-//! scaled by a factor (results must not depend on it). Test support, kept in one place so no crate carries
-//! its own copy; nothing in the solvers uses it.
+//! scaled by a factor (results must not depend on it); and the comparison of several seeds' mean answer with a
+//! reference's ([`ChannelMeans`]). Test support, kept in one place so no crate carries its own copy; nothing in
+//! the solvers uses it.
 
 use glam::{DVec3, dvec3};
 
@@ -258,4 +259,64 @@ pub fn two_rooms(t: f64) -> Scene {
         light,
     );
     b.build().expect("scene")
+}
+
+/// One channel's mean answer over a set of points: several independent runs' (their mean, and its standard
+/// error from the spread between runs) against a reference's (the mean of its per-point estimates, and the
+/// standard error that follows from theirs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChannelMeans {
+    /// The runs' mean over the points, averaged over the runs.
+    pub mean: f64,
+    /// Its standard error: the standard deviation of the runs' means over √runs.
+    pub se: f64,
+    /// The reference's mean over the points.
+    pub reference: f64,
+    /// Its standard error: √Σ se_i² / points.
+    pub reference_se: f64,
+}
+
+impl ChannelMeans {
+    /// Channel `c` of `runs` (each run's answers at the points, at least two runs) against `reference` (each
+    /// point's estimate and standard error, in the same order).
+    pub fn new(reference: &[(Rgb, Rgb)], runs: &[Vec<Rgb>], c: usize) -> Self {
+        let n = reference.len() as f64;
+        assert!(runs.len() >= 2, "a standard error needs at least two runs");
+        let means: Vec<f64> = runs
+            .iter()
+            .map(|r| r.iter().map(|b| b[c]).sum::<f64>() / n)
+            .collect();
+        let (mean, se) = mean_se(&means);
+        Self {
+            mean,
+            se,
+            reference: reference.iter().map(|(m, _)| m[c]).sum::<f64>() / n,
+            reference_se: reference
+                .iter()
+                .map(|(_, e)| e[c] * e[c])
+                .sum::<f64>()
+                .sqrt()
+                / n,
+        }
+    }
+
+    /// The tolerance `relative` × reference + `sigmas` × the combined standard error: a stated bias
+    /// allowance (0 for an unbiased method) plus the noise of both.
+    pub fn tolerance(&self, relative: f64, sigmas: f64) -> f64 {
+        relative * self.reference.abs() + sigmas * self.se.hypot(self.reference_se)
+    }
+
+    /// Whether the two means differ by no more than [`ChannelMeans::tolerance`].
+    pub fn agrees(&self, relative: f64, sigmas: f64) -> bool {
+        (self.mean - self.reference).abs() <= self.tolerance(relative, sigmas)
+    }
+}
+
+/// The mean of independent samples and its standard error (sample standard deviation over √count; at least
+/// two samples).
+pub fn mean_se(xs: &[f64]) -> (f64, f64) {
+    let k = xs.len() as f64;
+    let m = xs.iter().sum::<f64>() / k;
+    let var = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
+    (m, (var / k).sqrt())
 }
