@@ -9,6 +9,7 @@ use glam::DVec3;
 
 use crate::gouraud::ElementValue;
 use crate::locate::{ElementLocator, ElementTree};
+use radlab_method::SolveError;
 use radlab_scene::{FaceId, Polygon, Rgb, Scene};
 
 /// The default element size as a fraction of the scene's bounding-box diagonal, so every scene's scale gets the
@@ -146,4 +147,24 @@ impl ElementMesh {
 /// The default element size for a scene: [`DEFAULT_ELEMENT_SIZE_REL`] × its bounding-box diagonal.
 pub fn default_element_size(scene: &Scene) -> f64 {
     DEFAULT_ELEMENT_SIZE_REL * scene.diagonal()
+}
+
+/// The element size a method meshes `scene` with: `size` when set, else [`default_element_size`]; refused,
+/// naming the `element_size` parameter, when that is not a positive finite length (the default of a
+/// degenerate scene, e.g. one whose bounding diagonal is zero or infinite).
+pub fn element_size(size: Option<f64>, scene: &Scene) -> Result<f64, SolveError> {
+    let size = size.unwrap_or_else(|| default_element_size(scene));
+    if size.is_finite() && size > 0.0 {
+        Ok(size)
+    } else {
+        Err(SolveError::param(
+            "element_size",
+            format!(
+                "the default element size {size} is unusable for scene '{}' (bounding diagonal {}); set \
+                 element_size to a length > 0",
+                scene.name,
+                scene.diagonal()
+            ),
+        ))
+    }
 }

@@ -15,7 +15,7 @@ pub mod locate;
 pub mod reconstruction;
 pub mod render;
 
-pub use elements::{Element, ElementMesh, default_element_size};
+pub use elements::{Element, ElementMesh, default_element_size, element_size};
 pub use locate::{ElementLocator, ElementTree};
 pub use reconstruction::{Reconstruction, Reconstructor};
 pub use render::{Image, render_solution};

@@ -28,7 +28,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::{DVec2, DVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use radlab_answer::gouraud::interpolate_corners;
-use radlab_answer::{ElementMesh, Reconstruction, Reconstructor, default_element_size};
+use radlab_answer::{ElementMesh, Reconstruction, Reconstructor, element_size};
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_pathtrace::{EmitterSampler, trace_photons};
 use radlab_scene::{FaceId, Rgb, Scene, sampling::mix64};
@@ -124,20 +124,9 @@ impl<'a> DensityEstimationSolver<'a> {
     ) -> Result<Self, SolveError> {
         params.validate()?;
         let mesh = match params.reconstruction {
-            DensityReconstruction::Mesh | DensityReconstruction::FinalGather => {
-                let size = params
-                    .element_size
-                    .unwrap_or_else(|| default_element_size(scene));
-                if !(size.is_finite() && size > 0.0) {
-                    return Err(SolveError::param(
-                        "element_size",
-                        format!(
-                            "the default element size of this scene is {size}; set element_size explicitly"
-                        ),
-                    ));
-                }
-                Some(ElementMesh::new(scene, size))
-            }
+            DensityReconstruction::Mesh | DensityReconstruction::FinalGather => Some(
+                ElementMesh::new(scene, element_size(params.element_size, scene)?),
+            ),
             _ => None,
         };
         let surfaces = Surfaces::new(scene, params.group_angle.to_radians().cos());

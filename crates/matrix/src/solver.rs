@@ -10,7 +10,7 @@
 //! system is the plain one.
 
 use glam::DVec3;
-use radlab_answer::{ElementMesh, Reconstructor, default_element_size, gouraud::ElementValue};
+use radlab_answer::{ElementMesh, Reconstructor, element_size, gouraud::ElementValue};
 use radlab_kernels::open_fraction::open_fractions;
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{FaceId, Rgb, Scene};
@@ -70,18 +70,7 @@ impl<'a> MatrixSolver<'a> {
         seed: u64,
     ) -> Result<Self, SolveError> {
         params.validate()?;
-        let size = match params.element_size {
-            Some(s) => s,
-            None => default_element_size(scene),
-        };
-        if !(size.is_finite() && size > 0.0) {
-            return Err(SolveError::param(
-                "element_size",
-                format!(
-                    "the default element size of this scene is {size}; set element_size to a length > 0"
-                ),
-            ));
-        }
+        let size = element_size(params.element_size, scene)?;
         let budget = (params.memory_budget_mib * 1024.0 * 1024.0) as u64;
         let check = |n: u64| -> Result<(), SolveError> {
             let needed = assembly::required_bytes(n);

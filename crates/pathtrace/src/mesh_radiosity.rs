@@ -40,7 +40,7 @@
 
 use glam::DVec3;
 use radlab_answer::{
-    ElementMesh, Reconstruction, Reconstructor, default_element_size, gouraud::ElementValue,
+    ElementMesh, Reconstruction, Reconstructor, element_size, gouraud::ElementValue,
 };
 use radlab_kernels::open_fraction::open_fractions;
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
@@ -251,17 +251,7 @@ impl<'a> McRadiositySolver<'a> {
         seed: u64,
     ) -> Result<Self, SolveError> {
         params.validate()?;
-        let size = params
-            .element_size
-            .unwrap_or_else(|| default_element_size(scene));
-        if !(size.is_finite() && size > 0.0) {
-            return Err(SolveError::param(
-                "element_size",
-                format!(
-                    "the default element size of this scene is {size}; set element_size explicitly"
-                ),
-            ));
-        }
+        let size = element_size(params.element_size, scene)?;
         let mesh = ElementMesh::new(scene, size);
         let source_elements: Vec<usize> = (0..mesh.len())
             .filter(|&e| scene.material(mesh.elements[e].face as FaceId).is_emitter())

@@ -5,7 +5,7 @@
 //! alike. The adaptive threshold is a relative radiosity contrast and the stopping rule a fraction of the
 //! emitted power, so neither depends on the scene's scale or on its light's strength.
 
-use radlab_answer::{Reconstruction, default_element_size};
+use radlab_answer::{Reconstruction, element_size};
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
 use radlab_scene::Scene;
@@ -156,21 +156,7 @@ impl ProgressiveParams {
     /// The lengths for `scene`, checked against each other.
     pub(crate) fn resolve(&self, scene: &Scene) -> Result<Resolved, SolveError> {
         self.validate()?;
-        let element_size = match self.element_size {
-            Some(x) => x,
-            None => default_element_size(scene),
-        };
-        if !(element_size.is_finite() && element_size > 0.0) {
-            return Err(SolveError::param(
-                "element_size",
-                format!(
-                    "the default element size {element_size} is unusable for scene '{}' (bounding diagonal {}); \
-                     set element_size explicitly",
-                    scene.name,
-                    scene.diagonal()
-                ),
-            ));
-        }
+        let element_size = element_size(self.element_size, scene)?;
         let patch_size = self
             .patch_size
             .unwrap_or(DEFAULT_PATCH_FACTOR * element_size);
@@ -209,6 +195,7 @@ impl MethodParams for ProgressiveParams {}
 #[cfg(test)]
 mod tests {
     use super::*;
+    use radlab_answer::default_element_size;
 
     fn pairs(kv: &[(&str, &str)]) -> Vec<(String, String)> {
         kv.iter()
