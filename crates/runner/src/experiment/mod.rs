@@ -460,7 +460,7 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
-/// Seconds in at most four characters and a unit, for an image's label: "0.77 s", "12 s", "340 s".
+/// Seconds for an image's label: two decimals below 10 s ("0.77 s"), whole seconds above ("12 s", "340 s").
 fn short_seconds(s: f64) -> String {
     if s < 10.0 {
         format!("{s:.2} s")
