@@ -6,19 +6,12 @@
 
 use radlab_bdpt::{BdptParams, BdptSolver, Heuristic};
 use radlab_method::{MethodParams, Solution, Solver, Step, evaluation_points};
-use radlab_pathtrace::{PointEstimate, PointParams, SurfacePoint, estimate_points};
+use radlab_pathtrace::{PointEstimate, PointParams, SurfacePoint, estimate_points, surface_points};
 use radlab_scene::glam::DVec3;
 use radlab_scene::glam::dvec3;
 use radlab_scene::{Scene, SceneBuilder, builtin};
 use radlab_testkit::{add_box, hollow_box, material};
 use radlab_visibility::Accel;
-
-fn points(scene: &Scene, n: usize, seed: u64) -> Vec<SurfacePoint> {
-    evaluation_points(scene, n, seed)
-        .iter()
-        .map(SurfacePoint::from)
-        .collect()
-}
 
 fn run(
     scene: &Scene,
@@ -60,7 +53,7 @@ fn furnace_gives_e_over_one_minus_rho() {
         ))
         .expect("scene");
         let accel = Accel::new(&scene);
-        let pts = points(&scene, 8, 3);
+        let pts = surface_points(&evaluation_points(&scene, 8, 3));
         let exact = 1.0 / (1.0 - rho);
         for h in [Heuristic::Balance, Heuristic::Power] {
             let est = run(&scene, &accel, &params(512, h), 1, &pts);
@@ -94,7 +87,7 @@ fn furnace_gives_e_over_one_minus_rho() {
 fn mean_equals_the_path_tracers_on_the_cornell_box() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 6, 11);
+    let pts = surface_points(&evaluation_points(&scene, 6, 11));
     let reference = estimate_points(
         &scene,
         &accel,
@@ -146,7 +139,7 @@ fn mean_equals_the_path_tracers_where_light_arrives_only_indirectly() {
     let accel = Accel::new(&scene);
     let lamp = scene.faces.len() - 1;
     assert!(scene.faces[lamp].normal.x < -0.99, "the lamp faces -x");
-    let pts: Vec<SurfacePoint> = points(&scene, 64, 3)
+    let pts: Vec<SurfacePoint> = surface_points(&evaluation_points(&scene, 64, 3))
         .into_iter()
         .filter(|p| p.point.x > 1.05)
         .take(6)
@@ -200,7 +193,7 @@ fn mean_equals_the_path_tracers_where_light_arrives_only_indirectly() {
 fn rays_are_counted_and_points_off_the_set_are_reproducible() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 4, 2);
+    let pts = surface_points(&evaluation_points(&scene, 4, 2));
     let r0 = accel.rays_cast();
     let mut s = BdptSolver::new(&scene, &accel, params(64, Heuristic::Power), 1, pts.clone())
         .expect("valid");
@@ -229,7 +222,7 @@ fn rays_are_counted_and_points_off_the_set_are_reproducible() {
 fn deterministic_for_a_seed_and_any_thread_count() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 8, 4);
+    let pts = surface_points(&evaluation_points(&scene, 8, 4));
     let bits = |v: &[PointEstimate]| -> Vec<[u64; 3]> {
         v.iter()
             .map(|e| e.mean.to_array().map(f64::to_bits))

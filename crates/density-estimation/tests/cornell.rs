@@ -7,7 +7,7 @@
 use radlab_density_estimation::surfaces::Surfaces;
 use radlab_density_estimation::{DensityEstimationParams, DensityEstimationSolver};
 use radlab_method::{Solver, Step, evaluation_points};
-use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
+use radlab_pathtrace::{PointParams, estimate_points, surface_points};
 use radlab_scene::{Rgb, Scene, builtin};
 use radlab_testkit::ChannelMeans;
 use radlab_visibility::Accel;
@@ -41,10 +41,7 @@ fn bumpy_sphere_is_estimated_over_groups_of_faces() {
 
 fn agrees_with_the_path_tracer(scene: &Scene) {
     let accel = Accel::new(scene);
-    let pts: Vec<SurfacePoint> = evaluation_points(scene, 128, 3)
-        .iter()
-        .map(SurfacePoint::from)
-        .collect();
+    let pts = surface_points(&evaluation_points(scene, 128, 3));
     let reference = estimate_points(
         scene,
         &accel,

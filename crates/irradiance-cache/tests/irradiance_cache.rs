@@ -5,18 +5,11 @@
 
 use radlab_irradiance_cache::{IrradianceCacheParams, IrradianceCacheSolver};
 use radlab_method::{MethodParams, Solver, Step, evaluation_points};
-use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
+use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points, surface_points};
 use radlab_scene::glam::{DVec3, dvec3};
 use radlab_scene::{Rgb, Scene, builtin};
 use radlab_testkit::{ChannelMeans, mean_se, two_rooms};
 use radlab_visibility::Accel;
-
-fn points(scene: &Scene, n: usize, seed: u64) -> Vec<SurfacePoint> {
-    evaluation_points(scene, n, seed)
-        .iter()
-        .map(SurfacePoint::from)
-        .collect()
-}
 
 /// Runs the cache to convergence; radiosity at the points and the solver's record count.
 fn run(
@@ -57,7 +50,7 @@ fn furnace_is_exact_up_to_noise() {
         ))
         .expect("scene");
         let accel = Accel::new(&scene);
-        let pts = points(&scene, 300, 7);
+        let pts = surface_points(&evaluation_points(&scene, 300, 7));
         let exact = 1.0 / (1.0 - rho);
         // Independent seeds: the mean over points of each run, and the spread of those means. Records are
         // shared between points, so the runs (not the points) are the independent samples.
@@ -88,7 +81,7 @@ fn furnace_is_exact_up_to_noise() {
 fn agrees_with_the_path_tracer_on_the_cornell_box() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 256, 3);
+    let pts = surface_points(&evaluation_points(&scene, 256, 3));
     let reference = estimate_points(
         &scene,
         &accel,
@@ -155,7 +148,7 @@ fn no_light_leaks_through_a_thin_wall() {
             }
         }
     }
-    pts.extend(points(&scene, 200, 1));
+    pts.extend(surface_points(&evaluation_points(&scene, 200, 1)));
     // Room B: x > 1 (on the floor and ceiling quads, which span both rooms) or a "dark" face.
     let in_b = |p: &SurfacePoint| p.point.x > 1.0 + 4e-4;
     assert!(pts.iter().filter(|p| in_b(p)).count() > 400);
@@ -204,7 +197,7 @@ fn reuse_grows_with_the_number_of_points() {
     let params = small(0.2, 32);
     let mut last = -1.0;
     for n in [64usize, 512, 4096] {
-        let pts = points(&scene, n, 5);
+        let pts = surface_points(&evaluation_points(&scene, n, 5));
         let mut s =
             IrradianceCacheSolver::new(&scene, &accel, params.clone(), 1, pts).expect("valid");
         while s.step().expect("step") != Step::Converged {}
@@ -241,7 +234,7 @@ fn reuse_grows_with_the_number_of_points() {
 fn accuracy_zero_gathers_at_every_point() {
     let scene = builtin("furnace-cube?reflectance=0.5&tessellation=2").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 40, 2);
+    let pts = surface_points(&evaluation_points(&scene, 40, 2));
     let mut s = IrradianceCacheSolver::new(&scene, &accel, small(0.0, 16), 1, pts).expect("valid");
     while s.step().expect("step") != Step::Converged {}
     assert_eq!(s.counts().records, 40);
@@ -252,7 +245,7 @@ fn accuracy_zero_gathers_at_every_point() {
 fn deterministic_for_a_seed_and_any_thread_count() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 300, 4);
+    let pts = surface_points(&evaluation_points(&scene, 300, 4));
     let params = small(0.2, 32);
     let go = |threads: usize, seed: u64| {
         rayon::ThreadPoolBuilder::new()

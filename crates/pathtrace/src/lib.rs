@@ -101,7 +101,7 @@ pub use path_estimator::{DirectSampling, PathEstimator};
 pub use photon_tracing::{CHUNK, EMPTY_CHUNKS, Photon, PhotonBatch, trace_photons};
 pub use point_estimator::{
     DEFAULT_MAX_DEPTH, PointEstimate, PointParams, PointSampler, SAMPLES_PER_CHUNK, SurfacePoint,
-    estimate_points, estimate_points_with_progress, sample_points,
+    estimate_points, estimate_points_with_progress, sample_points, surface_points,
 };
 pub use point_solver::{METHOD_STREAM_TAG, PathTraceParams, PathTraceSolver, SteppedPoints};
 pub use query_points::{QueryPoints, coordinate_hash, coordinate_stream};

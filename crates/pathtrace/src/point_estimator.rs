@@ -81,6 +81,11 @@ impl From<&radlab_method::EvalPoint> for SurfacePoint {
     }
 }
 
+/// The surface points of evaluation points (e.g. [`radlab_method::evaluation_points`]), in their order.
+pub fn surface_points(points: &[radlab_method::EvalPoint]) -> Vec<SurfacePoint> {
+    points.iter().map(SurfacePoint::from).collect()
+}
+
 /// The estimate at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointEstimate {

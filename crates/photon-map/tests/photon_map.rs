@@ -10,19 +10,12 @@
 //! issue's coarse target), with the measured bias printed.
 
 use radlab_method::{MethodParams, Solver, Step, evaluation_points};
-use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
+use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points, surface_points};
 use radlab_photon_map::{PhotonMapParams, PhotonMapSolver, PhotonMode};
 use radlab_scene::glam::dvec3;
 use radlab_scene::{Rgb, Scene, builtin};
 use radlab_testkit::{ChannelMeans, mean_se, two_rooms};
 use radlab_visibility::Accel;
-
-fn points(scene: &Scene, n: usize, seed: u64) -> Vec<SurfacePoint> {
-    evaluation_points(scene, n, seed)
-        .iter()
-        .map(SurfacePoint::from)
-        .collect()
-}
 
 fn run(
     scene: &Scene,
@@ -65,7 +58,7 @@ fn progressive(photons: u64, passes: u32) -> PhotonMapParams {
 /// Mean over the points of each of `seeds` runs: (mean of runs, its standard error).
 fn furnace_mean(scene: &Scene, params: &PhotonMapParams, seeds: u64) -> (f64, f64) {
     let accel = Accel::new(scene);
-    let pts = points(scene, 200, 7);
+    let pts = surface_points(&evaluation_points(scene, 200, 7));
     let means: Vec<f64> = (1..=seeds)
         .map(|seed| {
             let b = run(scene, &accel, params, seed, &pts);
@@ -112,7 +105,7 @@ fn furnace_within_one_percent_and_progressive_is_consistent() {
 fn agrees_with_the_path_tracer_on_the_cornell_box() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 128, 3);
+    let pts = surface_points(&evaluation_points(&scene, 128, 3));
     let reference = estimate_points(
         &scene,
         &accel,
@@ -216,7 +209,7 @@ fn no_light_leaks_through_a_thin_wall() {
 fn deterministic_for_a_seed_and_any_thread_count() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts = points(&scene, 64, 4);
+    let pts = surface_points(&evaluation_points(&scene, 64, 4));
     let bits =
         |v: &[Rgb]| -> Vec<[u64; 3]> { v.iter().map(|b| b.to_array().map(f64::to_bits)).collect() };
     for params in [final_gather(20_000), progressive(5_000, 3)] {

@@ -11,7 +11,7 @@
 use radlab_answer::Reconstruction;
 use radlab_kernels::form_factor::point_polygon;
 use radlab_method::{MethodParams, Solver, Step, evaluation_points};
-use radlab_pathtrace::{PointParams, SurfacePoint, estimate_points};
+use radlab_pathtrace::{PointParams, estimate_points, surface_points};
 use radlab_radiosity_texture::{RadiosityTextureParams, RadiosityTextureSolver, SplitRule};
 use radlab_scene::glam::{DVec3, dvec3};
 use radlab_scene::{Polygon, Rgb, Scene, SceneBuilder, builtin};
@@ -335,10 +335,7 @@ fn shadow_edges_get_fine_leaves_and_sharpen_as_min_cell_shrinks() {
 fn agrees_with_the_path_tracer_on_the_cornell_box() {
     let scene = builtin("cornell").expect("scene");
     let accel = Accel::new(&scene);
-    let pts: Vec<SurfacePoint> = evaluation_points(&scene, 128, 3)
-        .iter()
-        .map(SurfacePoint::from)
-        .collect();
+    let pts = surface_points(&evaluation_points(&scene, 128, 3));
     let reference = estimate_points(
         &scene,
         &accel,

@@ -16,15 +16,6 @@ pub type BuildFn = for<'a> fn(
     &[EvalPoint],
 ) -> Result<Box<dyn Solver + 'a>, SolveError>;
 
-/// The evaluation points as the per-point methods take them (path tracing, bdpt, the irradiance cache, photon
-/// maps).
-fn surface_points(points: &[EvalPoint]) -> Vec<radlab_pathtrace::SurfacePoint> {
-    points
-        .iter()
-        .map(radlab_pathtrace::SurfacePoint::from)
-        .collect()
-}
-
 /// One declared parameter (name, kind, range, default, help), as `radlab methods` prints it.
 pub type ParamLine = radlab_method::ParamDecl;
 
@@ -240,7 +231,7 @@ pub fn methods() -> Vec<MethodInfo> {
             params: crate::pathtraced::params,
             build: |scene, accel, table, seed, points| {
                 let params = radlab_pathtrace::PathTraceParams::from_table(table)?;
-                let points = surface_points(points);
+                let points = radlab_pathtrace::surface_points(points);
                 Ok(Box::new(radlab_pathtrace::PathTraceSolver::new(
                     scene, accel, params, seed, points,
                 )?))
@@ -264,7 +255,7 @@ pub fn methods() -> Vec<MethodInfo> {
             params: param_lines::<radlab_irradiance_cache::IrradianceCacheParams>,
             build: |scene, accel, table, seed, points| {
                 let params = radlab_irradiance_cache::IrradianceCacheParams::from_table(table)?;
-                let points = surface_points(points);
+                let points = radlab_pathtrace::surface_points(points);
                 Ok(Box::new(
                     radlab_irradiance_cache::IrradianceCacheSolver::new(
                         scene, accel, params, seed, points,
@@ -302,7 +293,7 @@ pub fn methods() -> Vec<MethodInfo> {
             params: param_lines::<radlab_photon_map::PhotonMapParams>,
             build: |scene, accel, table, seed, points| {
                 let params = radlab_photon_map::PhotonMapParams::from_table(table)?;
-                let points = surface_points(points);
+                let points = radlab_pathtrace::surface_points(points);
                 Ok(Box::new(radlab_photon_map::PhotonMapSolver::new(
                     scene, accel, params, seed, points,
                 )?))
@@ -333,7 +324,7 @@ pub fn methods() -> Vec<MethodInfo> {
             params: param_lines::<radlab_bdpt::BdptParams>,
             build: |scene, accel, table, seed, points| {
                 let params = radlab_bdpt::BdptParams::from_table(table)?;
-                let points = surface_points(points);
+                let points = radlab_pathtrace::surface_points(points);
                 Ok(Box::new(radlab_bdpt::BdptSolver::new(
                     scene, accel, params, seed, points,
                 )?))

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use radlab_method::{EvalPoint, MethodParams};
-use radlab_pathtrace::{PathTraceParams, PathTraceSolver, SurfacePoint};
+use radlab_pathtrace::{PathTraceParams, PathTraceSolver, surface_points};
 use radlab_scene::Rgb;
 
 use super::solve::{MethodArgs, load, solve};
@@ -52,7 +52,7 @@ pub fn run(args: &ProbeArgs) -> Result<()> {
             &loaded.accel,
             params,
             a.seed,
-            eval.iter().map(SurfacePoint::from).collect(),
+            surface_points(&eval),
         )?;
         let bar = progress::spinner("pathtrace points");
         solve_loop::run(&mut solver, a.limits()?, |_, rec| {
