@@ -846,12 +846,51 @@ fn furnace_sphere_is_closed_and_faces_its_centre() {
 #[test]
 fn detailed_families_hit_their_face_counts() {
     for k in [100, 137, 1000, 20_000] {
-        for family in ["bumpy-sphere", "terrain"] {
+        for family in ["bumpy-sphere", "terrain", "polygon-soup"] {
             let s = load_scene(&format!("builtin:{family}?faces={k}")).expect("builds");
             let got = s.face_count() as f64;
             assert!((got / k as f64 - 1.0).abs() <= 0.1, "{family} k={k}: {got}");
         }
     }
+}
+
+#[test]
+fn polygon_soup_is_unconnected_inside_the_room_facing_every_way_and_seeded() {
+    let s = load_scene("builtin:polygon-soup?faces=4010").expect("builds");
+    let soup = faces_with(&s, "soup");
+    assert_eq!(soup.len(), 4000);
+    // No two triangles share a vertex index: a soup, not a mesh.
+    let mut seen = std::collections::HashSet::new();
+    for &f in &soup {
+        for &i in s.faces[f].indices.iter().filter(|&&i| i != u32::MAX) {
+            assert!(seen.insert(i), "vertex {i} shared");
+        }
+    }
+    // Inside the room, above the floor, below 1.2 + the largest circumradius (1.5 × 0.04).
+    for &f in &soup {
+        for v in s.polygon(f).vertices() {
+            assert!(
+                v.x.abs() < 2.0 && v.z.abs() < 2.0 && v.y > 0.0 && v.y < 1.26,
+                "{v}"
+            );
+        }
+    }
+    // Facing directions uniform on the sphere: the mean unit normal of n of them has standard deviation
+    // 1/sqrt(3 n) per axis (0.009 here); the mean of n_y^2 is 1/3 with standard deviation about 0.0047.
+    let n = soup.len() as f64;
+    let mean: DVec3 = soup.iter().map(|&f| s.faces[f].normal).sum::<DVec3>() / n;
+    assert!(mean.abs().max_element() < 0.04, "{mean}");
+    let y2 = soup
+        .iter()
+        .map(|&f| s.faces[f].normal.y.powi(2))
+        .sum::<f64>()
+        / n;
+    assert!((y2 - 1.0 / 3.0).abs() < 0.02, "{y2}");
+    // Same seed, same soup; another seed, another.
+    let again = load_scene("builtin:polygon-soup?faces=4010").expect("builds");
+    assert_eq!(s.vertices, again.vertices);
+    let other = load_scene("builtin:polygon-soup?faces=4010&seed=2").expect("builds");
+    assert_ne!(s.vertices, other.vertices);
 }
 
 #[test]
