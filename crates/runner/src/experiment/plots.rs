@@ -3,7 +3,8 @@
 //! (convergence), final error against time across each method's sweep (the speed/accuracy frontier), and final
 //! error against rays cast and against memory held. Log-log axes with ticks at 1-2-5 (or 1-3 for errors, shown as
 //! percentages: 1%, 3%, 10%) times powers of ten, each label once; the reference's noise floor as a dashed line
-//! labelled with its value; the legend beside the plot area, never over data. PNG and SVG come from one
+//! labelled with its value; the legend beside the plot area, never over data. Series take twelve colours, then
+//! the same colours again with triangles instead of circles, then with crosses, so that no two of 36 look alike. PNG and SVG come from one
 //! drawing routine, so they hold the same content. Time is the time to answer at the experiment's points: the
 //! solver's steps plus one answering pass (a final gather's cost). Text uses DejaVu Sans embedded in the
 //! binary, so no system font library is needed.
@@ -50,6 +51,23 @@ pub fn colour(k: usize) -> RGBColor {
         RGBColor(255, 187, 120),
     ];
     C[k % C.len()]
+}
+
+/// The k-th series' marker: circles for the first twelve series (one per [`colour`]), triangles for the next
+/// twelve, crosses after, so that series sharing a colour stay apart.
+#[derive(Clone, Copy)]
+enum Marker {
+    Circle,
+    Triangle,
+    Cross,
+}
+
+fn marker(k: usize) -> Marker {
+    match (k / 12) % 3 {
+        0 => Marker::Circle,
+        1 => Marker::Triangle,
+        _ => Marker::Cross,
+    }
 }
 
 /// One series of a plot.
@@ -207,9 +225,22 @@ where
         chart
             .draw_series(LineSeries::new(points.clone(), c.stroke_width(2)))
             .map_err(e)?;
-        chart
-            .draw_series(points.iter().map(|&p| Circle::new(p, 3, c.filled())))
-            .map_err(e)?;
+        match marker(s.colour) {
+            Marker::Circle => chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                .map(|_| ()),
+            Marker::Triangle => chart
+                .draw_series(
+                    points
+                        .iter()
+                        .map(|&p| TriangleMarker::new(p, 5, c.filled())),
+                )
+                .map(|_| ()),
+            Marker::Cross => chart
+                .draw_series(points.iter().map(|&p| Cross::new(p, 4, c.stroke_width(2))))
+                .map(|_| ()),
+        }
+        .map_err(e)?;
     }
     if let Some((y, label)) = &plot.hline
         && *y > 0.0
@@ -246,9 +277,12 @@ where
         legend_area
             .draw(&PathElement::new(vec![(8, y), (32, y)], c.stroke_width(2)))
             .map_err(e)?;
-        legend_area
-            .draw(&Circle::new((20, y), 3, c.filled()))
-            .map_err(e)?;
+        match marker(s.colour) {
+            Marker::Circle => legend_area.draw(&Circle::new((20, y), 3, c.filled())),
+            Marker::Triangle => legend_area.draw(&TriangleMarker::new((20, y), 5, c.filled())),
+            Marker::Cross => legend_area.draw(&Cross::new((20, y), 4, c.stroke_width(2))),
+        }
+        .map_err(e)?;
         legend_area
             .draw(&Text::new(
                 s.label.clone().unwrap_or_default(),
