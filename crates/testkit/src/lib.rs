@@ -2,10 +2,12 @@
 //!
 //! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
 //! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
-//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, and a scene
+//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, a block standing on the floor ([`sealed`]), and a scene
 //! scaled by a factor (results must not depend on it); and the comparison of several seeds' mean answer with a
 //! reference's ([`ChannelMeans`]). Test support, kept in one place so no crate carries its own copy; nothing in
 //! the solvers uses it.
+
+pub mod sealed;
 
 use glam::{DVec3, dvec3};
 
