@@ -71,6 +71,14 @@ fn points_under_a_block_answer_zero_and_points_beside_it_match_the_path_tracer()
             diff / sum,
             se / sum
         );
+        // The final gather resolves the block's shadow beside it (Gouraud and constant answers smear it:
+        // issue 45's shadows): its difference must be the reference's noise, E|N(0, σ)| ≈ 0.8 σ a point,
+        // within twice the summed standard errors.
+        if reconstruction == "final-gather" && diff > 2.0 * se {
+            failures.push(format!(
+                "final gather beside the block: L1 {diff} > 2 × {se}"
+            ));
+        }
         if worst_sealed > 1e-3 * lit {
             failures.push(format!(
                 "{reconstruction}: a sealed point answers {worst_sealed}"

@@ -91,11 +91,18 @@ pub fn open_share(
 /// usually pays one ray.
 pub const POINT_SEAL_RAYS: u32 = 32;
 
+/// A front face met closer than this share of the scene's diagonal (1e-3: 0.9 mm in the Cornell box,
+/// 7.7 mm in a 5 × 3 × 5 m room) closes a point as a back does in [`point_sealed`]: the point lies in a gap
+/// between two faces facing each other (a cube's bottom face lying on the floor, a partition's foot), and
+/// light reaches it only sideways through the gap. A point in a gap g is called sealed with probability
+/// (1 − (g/δ)²)^rays, so only gaps well under δ count (a fifth of it: 0.96³² ≈ 27%).
+pub const SEAL_GAP_REL: f64 = 1e-3;
+
 /// Whether the point `y` on `face` is sealed: every one of `rays` cosine-distributed rays (a point answer:
-/// [`POINT_SEAL_RAYS`]; a probe point of an element: [`DEFAULT_OPEN_RAYS`])
-/// from it (ignoring its own face) meets the back of a face, the rule [`open_share`] applies at each of its
-/// probe points; and the rays cast (one for an open point whose first ray escapes or meets a front face:
-/// the probe stops at the first open ray). A sealed point receives nothing (one-sided faces absorb at their
+/// [`POINT_SEAL_RAYS`]; a probe point of an element: [`DEFAULT_OPEN_RAYS`]) meets the back of a face or the
+/// front of one closer than [`SEAL_GAP_REL`] of the scene's diagonal (ignoring its own face; [`open_share`]
+/// applies the first rule only, at each of its probe points); and the rays cast (one for an open point whose
+/// first ray escapes or meets a front face farther away: the probe stops at the first open ray). A sealed point receives nothing (one-sided faces absorb at their
 /// backs), so its exact radiosity is its emission; point answers read this test to answer so. The random
 /// stream is a function of (seed, key) only.
 pub fn point_sealed(
@@ -108,13 +115,14 @@ pub fn point_sealed(
     key: u64,
 ) -> (bool, u64) {
     let n = scene.faces[face].normal;
+    let gap = SEAL_GAP_REL * scene.diagonal();
     let mut r = sampling::rng(seed, mix64(key ^ 0x7365_616c_6564_7074));
     for k in 0..rays {
         let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
         let d = sampling::cosine_hemisphere(n, u1, u2);
         let open = match accel.intersect_from(face, y, d) {
             None => true,
-            Some(hit) => scene.faces[hit.face].normal.dot(d) < 0.0,
+            Some(hit) => scene.faces[hit.face].normal.dot(d) < 0.0 && hit.t > gap,
         };
         if open {
             return (false, u64::from(k) + 1);
@@ -231,6 +239,39 @@ mod tests {
             assert!(!sealed, "{y}");
             assert!(rays <= 4, "{rays} rays at {y}");
         }
+    }
+
+    #[test]
+    fn points_in_a_gap_under_a_face_facing_them_are_sealed() {
+        // The panel 1e-4 above the floor faces down (its front toward the floor, as a cube's bottom face
+        // lying on a floor): the floor under it sees only a front 1e-4 away, below the gap of
+        // SEAL_GAP_REL × the diagonal (3.6e-3); beside it, the floor is open.
+        let mut b = SceneBuilder::new("gap");
+        let m = b
+            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
+            .expect("add");
+        let q = |x0: f64, x1: f64, y: f64| {
+            vec![
+                DVec3::new(x0, y, 0.0),
+                DVec3::new(x0, y, 2.0),
+                DVec3::new(x1, y, 2.0),
+                DVec3::new(x1, y, 0.0),
+            ]
+        };
+        b.add_polygon_points(&q(0.0, 2.0, 0.0), m, "floor")
+            .expect("floor");
+        let mut down = q(-1.0, 0.5, 1e-4);
+        down.reverse();
+        b.add_polygon_points(&down, m, "panel").expect("panel");
+        let scene = b.build().expect("scene");
+        let accel = Accel::new(&scene);
+        assert!(scene.faces[1].normal.y < 0.0);
+        let at = |x: f64| {
+            let y = DVec3::new(x, 0.0, 1.0);
+            point_sealed(&scene, &accel, 0, y, POINT_SEAL_RAYS, 7, point_key(0, y)).0
+        };
+        assert!(at(0.25) && at(0.45));
+        assert!(!at(0.55) && !at(1.5));
     }
 
     #[test]

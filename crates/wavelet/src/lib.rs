@@ -56,7 +56,7 @@
 //! ## Open shares at contacts
 //! A floor element part of which lies under a block standing on it receives light only on its open part
 //! (Baum, Mann, Smith & Winget 1991's light and shadow leaks). The linked solver estimates each leaf's open
-//! share o (radlab-kernels' probe, 128 rays a leaf, counted) and the engine holds every leaf's coefficients
+//! share o (at its receiver quadrature nodes, 8 probe rays each at most, counted) and the engine holds every leaf's coefficients
 //! over its open part, as it does for hierarchical radiosity: a link's delivery is credited to its
 //! receiver's open part (gain 1/ō on all M² coefficients, ō weighted by the targets' T_00), a wholly sealed
 //! leaf receives and sends nothing, and inner nodes pull means over open areas; the power delivered is

@@ -12,8 +12,10 @@
 //! parallelograms (triangles, general quads) hold their mean only ([`crate::link_tensor::holds_tensor`]).
 //!
 //! Open shares (Baum, Mann, Smith & Winget 1991's light and shadow leaks at contacts): with
-//! [`WaveletTransport::with_open_shares`] each leaf gets an open share o ∈ [0, 1] (radlab-kernels'
-//! probe: 16 stratified points × 8 cosine rays, a point sealed when every ray meets a back) and the engine
+//! [`WaveletTransport::with_open_shares`] each leaf gets an open share o ∈ [0, 1], estimated at its
+//! receiver quadrature nodes, where its tensors sample visibility: the quadrature-weighted share of nodes
+//! that radlab-kernels' probe finds open (8 cosine rays, a node sealed when every ray meets a back), so that
+//! for a leaf-to-leaf link with per-pair rays o matches what the tensor's mean saw. The engine
 //! (radlab-hierarchical's `open_share` module) holds the leaf's coefficients over its open part. The share
 //! enters per leaf, not per quadrature node: a link's receiver gain 1/ō_l, ō_l = Σ_t o_t A_t T^t_00 /
 //! Σ_t A_t T^t_00 weighted by each target's mean-to-mean entry T_00 = V F ([`Transport::coefficient_weight`]),

@@ -56,6 +56,7 @@ fn points_under_a_block_answer_zero_and_points_beside_it_match_the_path_tracer()
         (Basis::M2, WaveletReconstruction::Basis),
         (Basis::Haar, WaveletReconstruction::Basis),
         (Basis::M2, WaveletReconstruction::Smoothed),
+        (Basis::M2, WaveletReconstruction::FinalGather),
     ] {
         let params = WaveletParams {
             basis,
@@ -79,6 +80,14 @@ fn points_under_a_block_answer_zero_and_points_beside_it_match_the_path_tracer()
             diff / sum,
             se / sum
         );
+        // A final gather resolves the block's shadow beside it (the leaves' own answers smear it, at M2
+        // by 12% L1 here): its difference must be the reference's noise, E|N(0, σ)| ≈ 0.8 σ a point, within
+        // twice the summed standard errors.
+        if reconstruction == WaveletReconstruction::FinalGather && diff > 2.0 * se {
+            failures.push(format!(
+                "final gather beside the block: L1 {diff} > 2 × {se}"
+            ));
+        }
         if worst_sealed > 1e-3 * lit {
             failures.push(format!(
                 "{basis:?} {reconstruction:?}: a sealed point answers {worst_sealed}"
