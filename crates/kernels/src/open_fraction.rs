@@ -71,6 +71,11 @@ pub fn open_share(
             cast += 1;
             match accel.intersect_from(face, y, d) {
                 None => sealed = false,
+                // A hit at t = 0 is a surface the point lies on, entered through its back-facing side
+                // (`Accel`'s contact rule): the bottom of a box resting on the floor, seen from the floor
+                // under it. The two touch, so no light passes between them whichever way that surface
+                // faces: the ray stays sealed.
+                Some(hit) if hit.t <= 0.0 => {}
                 Some(hit) => {
                     if scene.faces[hit.face].normal.dot(d) < 0.0 {
                         sealed = false;
@@ -206,6 +211,44 @@ mod tests {
         let bare = covered_floor(-0.5, 1e-3);
         let accel = Accel::new(&bare);
         assert_eq!(open_share(&bare, &accel, &bare.polygon(0), 0, 7, 0).0, 1.0);
+    }
+
+    /// A 2 × 2 floor facing up with a unit box (outward faces, bottom included) resting on it, with no gap,
+    /// over x, z < 1: a quarter of the floor and all of the box's bottom touch.
+    fn box_on_floor() -> Scene {
+        let mut b = SceneBuilder::new("box on floor");
+        let m = b
+            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
+            .expect("add");
+        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+        let mut quad = |o: DVec3, u: DVec3, v: DVec3| {
+            b.add_polygon_points(&[o, o + u, o + u + v, o + v], m, "quad")
+                .expect("quad");
+        };
+        quad(DVec3::ZERO, 2.0 * z, 2.0 * x); // floor, +y
+        quad(DVec3::ZERO, x, z); // box bottom, -y (face 1)
+        quad(y, z, x); // top, +y
+        quad(DVec3::ZERO, y, x); // z = 0, -z
+        quad(z, x, y); // z = 1, +z
+        quad(DVec3::ZERO, z, y); // x = 0, -x
+        quad(x, y, z); // x = 1, +x
+        b.build().expect("scene")
+    }
+
+    #[test]
+    fn a_box_resting_on_a_floor_seals_the_floor_under_it_and_its_own_bottom() {
+        // Rays leaving the floor under the box meet the box's bottom at t = 0 (the accelerator's contact
+        // rule), from its front: the two surfaces touch, so no light reaches either. The floor is a quarter
+        // sealed (4 of its 16 stratified points lie under the box), the bottom wholly; the box's sides, which
+        // see the floor beside them, are open.
+        let scene = box_on_floor();
+        let accel = Accel::new(&scene);
+        let share = |f: usize| open_share(&scene, &accel, &scene.polygon(f), f, 7, f as u64).0;
+        assert_eq!(share(0), 0.75);
+        assert_eq!(share(1), 0.0);
+        for f in 2..7 {
+            assert_eq!(share(f), 1.0, "face {f}");
+        }
     }
 
     #[test]
