@@ -18,8 +18,9 @@
 //!
 //! The estimate: `side` × `side` stratified points on the element, each casting `rays` cosine-distributed
 //! rays ignoring its own face. A point is sealed when every ray hits the back of a face (one-sided faces
-//! absorb at their backs, so such a point receives nothing); a ray that escapes the scene or reaches a
-//! front face leaves the point open. o is the open share of the points ([`open_share`]); as an open fraction
+//! absorb at their backs, so such a point receives nothing) or a face the point touches (t = 0); a ray that
+//! escapes the scene or reaches a front face leaves the point open. A point answer's test ([`point_sealed`])
+//! also closes rays at front faces nearer than a small gap. o is the open share of the points ([`open_share`]); as an open fraction
 //! ([`open_fraction`], what matrix and progressive radiosity solve with) an element with no open point is
 //! left at o = 1 (it receives next to nothing, so there is nothing to correct). The random stream is a
 //! function of (seed, key) only.
@@ -69,18 +70,8 @@ pub fn open_share(
             }
             let d = sampling::cosine_hemisphere(n, u1, u2);
             cast += 1;
-            match accel.intersect_from(face, y, d) {
-                None => sealed = false,
-                // A hit at t = 0 is a surface the point lies on, entered through its back-facing side
-                // (`Accel`'s contact rule): the bottom of a box resting on the floor, seen from the floor
-                // under it. The two touch, so no light passes between them whichever way that surface
-                // faces: the ray stays sealed.
-                Some(hit) if hit.t <= 0.0 => {}
-                Some(hit) => {
-                    if scene.faces[hit.face].normal.dot(d) < 0.0 {
-                        sealed = false;
-                    }
-                }
+            if ray_opens(scene, accel, face, y, d, 0.0) {
+                sealed = false;
             }
         }
         if !sealed {
@@ -88,6 +79,26 @@ pub fn open_share(
         }
     }
     (open as f64 / (side * side) as f64, cast)
+}
+
+/// Whether the probe ray from `y` on `face` along `d` leaves the point open: it escapes the scene, or meets
+/// the front of a face farther than `gap`. A face's back absorbs (one-sided faces), and a hit at t ≤ `gap`
+/// closes the ray whichever way that face looks: t = 0 is a surface the point lies on, entered through its
+/// back-facing side (`Accel`'s contact rule: the bottom of a box resting on the floor, seen from the floor
+/// under it), and the two touch, so no light passes between them. [`open_share`] takes `gap` = 0 (contacts
+/// only), [`point_sealed`] [`SEAL_GAP_REL`] of the scene's diagonal.
+fn ray_opens(
+    scene: &Scene,
+    accel: &Accel,
+    face: FaceId,
+    y: glam::DVec3,
+    d: glam::DVec3,
+    gap: f64,
+) -> bool {
+    match accel.intersect_from(face, y, d) {
+        None => true,
+        Some(hit) => hit.t > gap && scene.faces[hit.face].normal.dot(d) < 0.0,
+    }
 }
 
 /// Probe rays of a point answer's seal test ([`point_sealed`], default 32): more than an element's probe
@@ -125,11 +136,7 @@ pub fn point_sealed(
     for k in 0..rays {
         let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
         let d = sampling::cosine_hemisphere(n, u1, u2);
-        let open = match accel.intersect_from(face, y, d) {
-            None => true,
-            Some(hit) => scene.faces[hit.face].normal.dot(d) < 0.0 && hit.t > gap,
-        };
-        if open {
+        if ray_opens(scene, accel, face, y, d, gap) {
             return (false, u64::from(k) + 1);
         }
     }

@@ -207,8 +207,8 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
     }
 
     /// The same transport estimating every leaf's open share in `scene` (the scene the accelerator was built
-    /// from): radlab-kernels' [`open_share`], 16 stratified points × 8 cosine rays through the counted
-    /// accelerator, the stream keyed by the leaf. The engine then holds each leaf's coefficients over its
+    /// from): the quadrature-weighted share of its receiver nodes that radlab-kernels' [`point_sealed`] finds
+    /// open (8 cosine rays a node through the counted accelerator, the stream keyed by the leaf and node). The engine then holds each leaf's coefficients over its
     /// open part, per leaf (the crate's `transport` module).
     pub fn with_open_shares(mut self, scene: &'a Scene) -> Self {
         self.open_shares = Some(scene);
