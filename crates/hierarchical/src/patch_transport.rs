@@ -139,11 +139,24 @@ impl PatchKernel<'_> {
         if recv.face == src.face {
             return None;
         }
-        let (f_rs, lo, hi) = self.kernel_samples(recv, src);
-        if f_rs.is_nan() || f_rs <= 0.0 {
+        let (mut f_rs, lo, mut hi) = self.kernel_samples(recv, src);
+        if f_rs.is_nan() {
             return None;
         }
         let f_sr = self.kernel_mean(src, recv);
+        if f_rs <= 0.0 {
+            // Every receiver sample lies behind the source's plane, yet part of the receiver may still see
+            // the source (a floor face whose Gauss points all lie on the far side of a block standing on
+            // it): dropping the link would lose that light for good, since only links are refined. The
+            // source's own samples see the receiver's front part, so F_rs comes by reciprocity,
+            // A_r F_rs = A_s F_sr, and becomes the link's spread, so that the oracle refines the link
+            // down to where the receiver's samples resolve the source's plane.
+            if !(f_sr > 0.0) {
+                return None;
+            }
+            f_rs = src.area * f_sr / recv.area;
+            hi = hi.max(f_rs);
+        }
         // Order the ends by key so the link and its reverse cast the same rays.
         let (kr, ks) = (recv.key(), src.key());
         let (a, b) = if kr <= ks { (recv, src) } else { (src, recv) };

@@ -733,3 +733,45 @@ fn a_solve_at_its_step_cap_says_so() {
     assert_eq!(last_step(capped), Some(Step::Capped));
     assert_eq!(last_step(leaf_params()), Some(Step::Converged));
 }
+
+#[test]
+fn a_floor_gathers_the_side_of_a_cube_whose_plane_its_samples_miss() {
+    // The cube's x = 2 side (face 9) stands a little above the floor (face 0), which is one 2.5 × 2.5 quad:
+    // the floor's Gauss points and centroid all lie on the far side of that side's plane (x < 2), yet the
+    // floor beyond it (x > 2) sees it whole, unoccluded (no leaf is sealed, so no open share intervenes). Each floor leaf there must gather exactly its own kernel mean toward the side,
+    // F = mean over its Gauss points of the point-to-polygon factor (closed form): a link dropped because
+    // the floor's samples missed the side's front would give 0 and lose that light, a leak that the
+    // furnace at ρ = 0.9 magnifies tenfold.
+    let scene = radlab_testkit::furnace_with_cube(0.9, 1.0, 0.25);
+    let accel = Accel::new(&scene);
+    let p = HierarchicalParams {
+        epsilon: 0.05,
+        ..leaf_params()
+    };
+    let s = solve(&scene, &accel, p.clone());
+    let e = s.engine();
+    let side = scene.polygon(9);
+    let rows = e.row_sums_through(&|_r, src, _l| src.face == 9);
+    let mut checked = 0;
+    for i in 0..e.nodes().len() as u32 {
+        let n = &e.nodes()[i as usize];
+        let c = n.centroid;
+        if !e.is_leaf(i) || n.face != 0 || c.x < 2.0 || !(1.0..2.0).contains(&c.z) {
+            continue;
+        }
+        if n.polygon.vertices().iter().any(|v| v.x < 2.0) {
+            continue; // only leaves wholly beyond the side's plane
+        }
+        let exact: f64 = radlab_kernels::form_factor::receiver_points(&n.polygon, p.quadrature)
+            .iter()
+            .map(|(x, w)| w * radlab_kernels::form_factor::point_polygon(*x, n.normal, &side))
+            .sum();
+        let got = rows[i as usize].x;
+        assert!(
+            (got - exact).abs() <= 1e-6 * exact.max(1e-3),
+            "floor leaf at {c}: gathers {got} from the cube's side, its kernel mean is {exact}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 2, "{checked} floor leaves in front of the side");
+}

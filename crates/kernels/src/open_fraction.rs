@@ -18,8 +18,9 @@
 //!
 //! The estimate: `side` × `side` stratified points on the element, each casting `rays` cosine-distributed
 //! rays ignoring its own face. A point is sealed when every ray hits the back of a face (one-sided faces
-//! absorb at their backs, so such a point receives nothing); a ray that escapes the scene or reaches a
-//! front face leaves the point open. o is the open share of the points ([`open_share`]); as an open fraction
+//! absorb at their backs, so such a point receives nothing) or a face the point touches (t = 0); a ray that
+//! escapes the scene or reaches a front face leaves the point open. A point answer's test ([`point_sealed`])
+//! also closes rays at front faces nearer than a small gap. o is the open share of the points ([`open_share`]); as an open fraction
 //! ([`open_fraction`], what matrix and progressive radiosity solve with) an element with no open point is
 //! left at o = 1 (it receives next to nothing, so there is nothing to correct). The random stream is a
 //! function of (seed, key) only.
@@ -69,13 +70,8 @@ pub fn open_share(
             }
             let d = sampling::cosine_hemisphere(n, u1, u2);
             cast += 1;
-            match accel.intersect_from(face, y, d) {
-                None => sealed = false,
-                Some(hit) => {
-                    if scene.faces[hit.face].normal.dot(d) < 0.0 {
-                        sealed = false;
-                    }
-                }
+            if ray_opens(scene, accel, face, y, d, 0.0) {
+                sealed = false;
             }
         }
         if !sealed {
@@ -83,6 +79,77 @@ pub fn open_share(
         }
     }
     (open as f64 / (side * side) as f64, cast)
+}
+
+/// Whether the probe ray from `y` on `face` along `d` leaves the point open: it escapes the scene, or meets
+/// the front of a face farther than `gap`. A face's back absorbs (one-sided faces), and a hit at t ≤ `gap`
+/// closes the ray whichever way that face looks: t = 0 is a surface the point lies on, entered through its
+/// back-facing side (`Accel`'s contact rule: the bottom of a box resting on the floor, seen from the floor
+/// under it), and the two touch, so no light passes between them. [`open_share`] takes `gap` = 0 (contacts
+/// only), [`point_sealed`] [`SEAL_GAP_REL`] of the scene's diagonal.
+fn ray_opens(
+    scene: &Scene,
+    accel: &Accel,
+    face: FaceId,
+    y: glam::DVec3,
+    d: glam::DVec3,
+    gap: f64,
+) -> bool {
+    match accel.intersect_from(face, y, d) {
+        None => true,
+        Some(hit) => hit.t > gap && scene.faces[hit.face].normal.dot(d) < 0.0,
+    }
+}
+
+/// Probe rays of a point answer's seal test ([`point_sealed`], default 32): more than an element's probe
+/// points cast ([`DEFAULT_OPEN_RAYS`]), since a point wrongly called sealed answers 0; a point with a tenth
+/// of its cosine-weighted hemisphere open passes for sealed with probability 0.9³² ≈ 3%. An open point
+/// usually pays one ray.
+pub const POINT_SEAL_RAYS: u32 = 32;
+
+/// A front face met closer than this share of the scene's diagonal (1e-3: 0.9 mm in the Cornell box,
+/// 7.7 mm in a 5 × 3 × 5 m room) closes a point as a back does in [`point_sealed`]: the point lies in a gap
+/// between two faces facing each other (a cube's bottom face lying on the floor, a partition's foot), and
+/// light reaches it only sideways through the gap. A point in a gap g is called sealed with probability
+/// (1 − (g/δ)²)^rays, so only gaps well under δ count (a fifth of it: 0.96³² ≈ 27%).
+pub const SEAL_GAP_REL: f64 = 1e-3;
+
+/// Whether the point `y` on `face` is sealed: every one of `rays` cosine-distributed rays (a point answer:
+/// [`POINT_SEAL_RAYS`]; a probe point of an element: [`DEFAULT_OPEN_RAYS`]) meets the back of a face or the
+/// front of one closer than [`SEAL_GAP_REL`] of the scene's diagonal (ignoring its own face; [`open_share`]
+/// applies the first rule only, at each of its probe points); and the rays cast (one for an open point whose
+/// first ray escapes or meets a front face farther away: the probe stops at the first open ray). A sealed point receives nothing (one-sided faces absorb at their
+/// backs), so its exact radiosity is its emission; point answers read this test to answer so. The random
+/// stream is a function of (seed, key) only.
+pub fn point_sealed(
+    scene: &Scene,
+    accel: &Accel,
+    face: FaceId,
+    y: glam::DVec3,
+    rays: u32,
+    seed: u64,
+    key: u64,
+) -> (bool, u64) {
+    let n = scene.faces[face].normal;
+    let gap = SEAL_GAP_REL * scene.diagonal();
+    let mut r = sampling::rng(seed, mix64(key ^ 0x7365_616c_6564_7074));
+    for k in 0..rays {
+        let (u1, u2) = (sampling::uniform(&mut r), sampling::uniform(&mut r));
+        let d = sampling::cosine_hemisphere(n, u1, u2);
+        if ray_opens(scene, accel, face, y, d, gap) {
+            return (false, u64::from(k) + 1);
+        }
+    }
+    (true, u64::from(rays))
+}
+
+/// A key for [`point_sealed`] from a point's face and coordinates (the same point, the same stream).
+pub fn point_key(face: FaceId, y: glam::DVec3) -> u64 {
+    let mut k = mix64(face as u64 ^ 0x706f_696e_745f_6b65);
+    for c in y.to_array() {
+        k = mix64(k ^ c.to_bits());
+    }
+    k
 }
 
 /// The open fractions of `elements` (each given as its polygon and face by `part`), on rayon threads, element k
@@ -151,6 +218,110 @@ mod tests {
         let bare = covered_floor(-0.5, 1e-3);
         let accel = Accel::new(&bare);
         assert_eq!(open_share(&bare, &accel, &bare.polygon(0), 0, 7, 0).0, 1.0);
+    }
+
+    /// A 2 × 2 floor facing up with a unit box (outward faces, bottom included) resting on it, with no gap,
+    /// over x, z < 1: a quarter of the floor and all of the box's bottom touch.
+    fn box_on_floor() -> Scene {
+        let mut b = SceneBuilder::new("box on floor");
+        let m = b
+            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
+            .expect("add");
+        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+        let mut quad = |o: DVec3, u: DVec3, v: DVec3| {
+            b.add_polygon_points(&[o, o + u, o + u + v, o + v], m, "quad")
+                .expect("quad");
+        };
+        quad(DVec3::ZERO, 2.0 * z, 2.0 * x); // floor, +y
+        quad(DVec3::ZERO, x, z); // box bottom, -y (face 1)
+        quad(y, z, x); // top, +y
+        quad(DVec3::ZERO, y, x); // z = 0, -z
+        quad(z, x, y); // z = 1, +z
+        quad(DVec3::ZERO, z, y); // x = 0, -x
+        quad(x, y, z); // x = 1, +x
+        b.build().expect("scene")
+    }
+
+    #[test]
+    fn a_box_resting_on_a_floor_seals_the_floor_under_it_and_its_own_bottom() {
+        // Rays leaving the floor under the box meet the box's bottom at t = 0 (the accelerator's contact
+        // rule), from its front: the two surfaces touch, so no light reaches either. The floor is a quarter
+        // sealed (4 of its 16 stratified points lie under the box), the bottom wholly; the box's sides, which
+        // see the floor beside them, are open.
+        let scene = box_on_floor();
+        let accel = Accel::new(&scene);
+        let share = |f: usize| open_share(&scene, &accel, &scene.polygon(f), f, 7, f as u64).0;
+        assert_eq!(share(0), 0.75);
+        assert_eq!(share(1), 0.0);
+        for f in 2..7 {
+            assert_eq!(share(f), 1.0, "face {f}");
+        }
+    }
+
+    #[test]
+    fn points_under_a_covering_are_sealed_and_points_beside_it_are_not() {
+        // The panel covers x < 0.5 of the floor a millimetre above it: every point under it sees only the
+        // panel's back (32 rays); a point a centimetre beside it, or on the panel, is open at its first ray
+        // or after a few.
+        let scene = covered_floor(0.5, 1e-3);
+        let accel = Accel::new(&scene);
+        for x in [0.05, 0.25, 0.45] {
+            let y = DVec3::new(x, 0.0, 1.0);
+            let (sealed, rays) =
+                point_sealed(&scene, &accel, 0, y, POINT_SEAL_RAYS, 7, point_key(0, y));
+            assert!(sealed, "x = {x}");
+            assert_eq!(rays, u64::from(POINT_SEAL_RAYS));
+        }
+        for (face, y) in [
+            (0, DVec3::new(0.51, 0.0, 1.0)),
+            (0, DVec3::new(1.5, 0.0, 1.0)),
+            (1, DVec3::new(0.0, 1e-3, 1.0)),
+        ] {
+            let (sealed, rays) = point_sealed(
+                &scene,
+                &accel,
+                face,
+                y,
+                POINT_SEAL_RAYS,
+                7,
+                point_key(face, y),
+            );
+            assert!(!sealed, "{y}");
+            assert!(rays <= 4, "{rays} rays at {y}");
+        }
+    }
+
+    #[test]
+    fn points_in_a_gap_under_a_face_facing_them_are_sealed() {
+        // The panel 1e-4 above the floor faces down (its front toward the floor, as a cube's bottom face
+        // lying on a floor): the floor under it sees only a front 1e-4 away, below the gap of
+        // SEAL_GAP_REL × the diagonal (3.6e-3); beside it, the floor is open.
+        let mut b = SceneBuilder::new("gap");
+        let m = b
+            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
+            .expect("add");
+        let q = |x0: f64, x1: f64, y: f64| {
+            vec![
+                DVec3::new(x0, y, 0.0),
+                DVec3::new(x0, y, 2.0),
+                DVec3::new(x1, y, 2.0),
+                DVec3::new(x1, y, 0.0),
+            ]
+        };
+        b.add_polygon_points(&q(0.0, 2.0, 0.0), m, "floor")
+            .expect("floor");
+        let mut down = q(-1.0, 0.5, 1e-4);
+        down.reverse();
+        b.add_polygon_points(&down, m, "panel").expect("panel");
+        let scene = b.build().expect("scene");
+        let accel = Accel::new(&scene);
+        assert!(scene.faces[1].normal.y < 0.0);
+        let at = |x: f64| {
+            let y = DVec3::new(x, 0.0, 1.0);
+            point_sealed(&scene, &accel, 0, y, POINT_SEAL_RAYS, 7, point_key(0, y)).0
+        };
+        assert!(at(0.25) && at(0.45));
+        assert!(!at(0.55) && !at(1.5));
     }
 
     #[test]

@@ -2,10 +2,12 @@
 //!
 //! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
 //! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
-//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, and a scene
+//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, a block standing on the floor ([`sealed`]), and a scene
 //! scaled by a factor (results must not depend on it); and the comparison of several seeds' mean answer with a
 //! reference's ([`ChannelMeans`]). Test support, kept in one place so no crate carries its own copy; nothing in
 //! the solvers uses it.
+
+pub mod sealed;
 
 use glam::{DVec3, dvec3};
 
@@ -80,6 +82,39 @@ pub fn room(name: &str, extra: &dyn Fn(&mut SceneBuilder)) -> Scene {
         }
     }
     extra(&mut b);
+    b.build().expect("scene")
+}
+
+/// A closed furnace room on [0, 2.5] × [0, 2] × [0, 2.5] (inward faces, one quad each, y up) with a unit
+/// cube over x, z ∈ [1, 2] and y ∈ [lift, 1 + lift] (outward faces; with `lift` = 0 it rests on the floor
+/// with no gap, its bottom touching it), every face of reflectance `rho` and emission `e`. Every point light
+/// can reach has B = E/(1 − ρ); a resting cube's bottom and the floor under it receive nothing. The floor's
+/// 2 × 2 Gauss points (x, z ≈ 0.53, 1.97) and centroid all lie behind the planes of the cube's x = 2 and
+/// z = 2 sides, which the floor beyond them sees. Faces: the room's y = 0, y = 2, x = 0, x = 2.5, z = 0,
+/// z = 2.5 (0–5), then the cube's bottom, top, x = 1, x = 2, z = 1, z = 2 (6–11).
+pub fn furnace_with_cube(rho: f64, e: f64, lift: f64) -> Scene {
+    let mut b = SceneBuilder::new("furnace with a cube");
+    let m = material(&mut b, "furnace", rho, e);
+    let (w, h) = (2.5, 2.0);
+    let l = lift;
+    let sides = [
+        (dvec3(0., 0., 0.), dvec3(0., 0., w), dvec3(w, 0., 0.)), // floor, +y
+        (dvec3(0., h, 0.), dvec3(w, 0., 0.), dvec3(0., 0., w)),  // ceiling, -y
+        (dvec3(0., 0., 0.), dvec3(0., h, 0.), dvec3(0., 0., w)), // x = 0, +x
+        (dvec3(w, 0., 0.), dvec3(0., 0., w), dvec3(0., h, 0.)),  // x = w, -x
+        (dvec3(0., 0., 0.), dvec3(w, 0., 0.), dvec3(0., h, 0.)), // z = 0, +z
+        (dvec3(0., 0., w), dvec3(0., h, 0.), dvec3(w, 0., 0.)),  // z = w, -z
+        (dvec3(1., l, 1.), dvec3(1., 0., 0.), dvec3(0., 0., 1.)), // cube bottom, -y
+        (dvec3(1., l + 1., 1.), dvec3(0., 0., 1.), dvec3(1., 0., 0.)), // top, +y
+        (dvec3(1., l, 1.), dvec3(0., 0., 1.), dvec3(0., 1., 0.)), // x = 1, -x
+        (dvec3(2., l, 1.), dvec3(0., 1., 0.), dvec3(0., 0., 1.)), // x = 2, +x
+        (dvec3(1., l, 1.), dvec3(0., 1., 0.), dvec3(1., 0., 0.)), // z = 1, -z
+        (dvec3(1., l, 2.), dvec3(1., 0., 0.), dvec3(0., 1., 0.)), // z = 2, +z
+    ];
+    for (o, u, v) in sides {
+        b.add_polygon_points(&[o, o + u, o + u + v, o + v], m, "furnace")
+            .expect("quad");
+    }
     b.build().expect("scene")
 }
 

@@ -53,8 +53,20 @@
 //! shot that needs it unless the cache holds it. [`radlab_method::Solver::counters`] reports shots, sweeps,
 //! corrections, transient links, cache hits, misses and evictions and the peak transient bytes.
 //!
+//! ## Open shares at contacts
+//! A floor element part of which lies under a block standing on it receives light only on its open part
+//! (Baum, Mann, Smith & Winget 1991's light and shadow leaks). The linked solver estimates each leaf's open
+//! share o (at its receiver quadrature nodes, 8 probe rays each at most, counted) and the engine holds every leaf's coefficients
+//! over its open part, as it does for hierarchical radiosity: a link's delivery is credited to its
+//! receiver's open part (gain 1/ō on all M² coefficients, ō weighted by the targets' T_00), a wholly sealed
+//! leaf receives and sends nothing, and inner nodes pull means over open areas; the power delivered is
+//! unchanged (the share enters per leaf: [`transport`]). A point answer inside a leaf with o < 1 first tests
+//! the point ([`radlab_kernels::open_fraction::point_sealed`], up to 32 rays, charged to answering): a point
+//! under the block answers its emission, as the exact solution does, whatever the reconstruction.
+//!
 //! ## Not done
-//! Light leaks at contacts are not corrected (no open shares, unlike hierarchical radiosity). Linkless: an
+//! Linkless shooting does not estimate open shares (every leaf open; its shots deliver without the
+//! engine's per-link gains). Linkless: an
 //! element split after it received light keeps that light as its parent's, pushed (the receiver gather's
 //! approximation), where the linked leaf gather re-integrates every link at the new leaves, so the two differ
 //! by about ε (tests/linkless.rs) and a furnace refined at mixed levels is off by up to a few 1e-3 at

@@ -2,7 +2,9 @@
 //! engine, driven through the [`Solver`] trait, answering at points from the leaves' basis functions, their
 //! vertex-averaged means or a final gather (the engine's shared output layer).
 
+use radlab_hierarchical::output::locate;
 use radlab_hierarchical::{Engine, Patch, SurfaceOutput};
+use radlab_kernels::open_fraction::{POINT_SEAL_RAYS, point_key, point_sealed};
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{FaceId, Rgb, Scene};
 use radlab_visibility::Accel;
@@ -57,6 +59,7 @@ pub struct WaveletSolver<'a> {
     engines: Engines<'a>,
     output: SurfaceOutput,
     rays: u64,
+    seed: u64,
 }
 
 fn run<'a, const K: usize>(
@@ -79,6 +82,12 @@ fn run<'a, const K: usize>(
         params.gather,
         seed,
     );
+    // Open shares: the linked engine asks for them; linkless shooting does not estimate them.
+    let transport = if params.linkless {
+        transport
+    } else {
+        transport.with_open_shares(scene)
+    };
     let mut engine = Engine::new(roots, transport, hp, min_size)?;
     if params.linkless {
         engine.set_linkless(params.link_cache_bytes());
@@ -107,6 +116,7 @@ impl<'a> WaveletSolver<'a> {
             engines,
             output: SurfaceOutput::new(params.reconstruction.answer(), seed),
             rays: 0,
+            seed,
         })
     }
 
@@ -142,8 +152,21 @@ impl Solution for WaveletSolver<'_> {
         self.output.gather_work().1
     }
 
+    /// The reconstruction's answer; at a point of a leaf partly or wholly sealed (open share below 1), a
+    /// point probe first ([`point_sealed`]): a sealed point answers its emission only.
     fn radiosity_at(&self, face: FaceId, point: glam::DVec3) -> Rgb {
-        with_engine!(&self.engines, e => self.output.radiosity_at(e, self.scene, self.accel, face, point))
+        with_engine!(&self.engines, e => {
+            let partly_sealed = locate(e, face, point)
+                .and_then(|i| e.open_shares().get(i as usize).copied())
+                .is_some_and(|o| o < 1.0);
+            if partly_sealed && face < self.scene.face_count() {
+                let key = point_key(face, point);
+                if point_sealed(self.scene, self.accel, face, point, POINT_SEAL_RAYS, self.seed, key).0 {
+                    return self.scene.emission(face);
+                }
+            }
+            self.output.radiosity_at(e, self.scene, self.accel, face, point)
+        })
     }
 }
 

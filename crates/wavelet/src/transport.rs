@@ -11,6 +11,24 @@
 //! node's radiosity; the transport's exitance holds the rest (index 0 unused). Elements that are not
 //! parallelograms (triangles, general quads) hold their mean only ([`crate::link_tensor::holds_tensor`]).
 //!
+//! Open shares (Baum, Mann, Smith & Winget 1991's light and shadow leaks at contacts): with
+//! [`WaveletTransport::with_open_shares`] each leaf gets an open share o ∈ [0, 1], estimated at its
+//! receiver quadrature nodes, where its tensors sample visibility: the quadrature-weighted share of nodes
+//! that radlab-kernels' probe finds open (8 cosine rays, a node sealed when every ray meets a back), so that
+//! for a leaf-to-leaf link with per-pair rays o matches what the tensor's mean saw. The engine
+//! (radlab-hierarchical's `open_share` module) holds the leaf's coefficients over its open part. The share
+//! enters per leaf, not per quadrature node: a link's receiver gain 1/ō_l, ō_l = Σ_t o_t A_t T^t_00 /
+//! Σ_t A_t T^t_00 weighted by each target's mean-to-mean entry T_00 = V F ([`Transport::coefficient_weight`]),
+//! scales all M² coefficients it delivers, a wholly sealed leaf (o = 0) receives and sends nothing, and any
+//! other source sends its M² coefficients as they are (its tensor already carries its sealed nodes'
+//! visibility). So the power
+//! delivered is unchanged and a leaf under a coarse link, whose tensor is re-integrated with the link's one
+//! visibility fraction, no longer takes light its sealed part cannot receive. Per leaf because the gain is
+//! the engine's, one number per (link, target): it scales the shape of a straddling leaf's irradiance with
+//! its mean, which for a leaf-to-leaf link with per-pair rays (the shape already near 0 at sealed nodes)
+//! overstates the open part's variation by 1/o; a point answer inside a leaf with o < 1 first tests the
+//! point itself ([`radlab_kernels::open_fraction::point_sealed`]).
+//!
 //! Refinement reads [`WaveletOracle`]: Bekaert & Willems 1996's estimate from the link's residuals at the
 //! receiver nodes, ρ_R max_channel Σ_β |b^S_β| e_β / B̄ (B̄ the scene's mean radiosity, so ε is
 //! dimensionless), or HSA91's F and BF on the link's form factors.
@@ -20,7 +38,9 @@ use radlab_hierarchical::{
     GatherAt, LinearState, LinkError, LinkPayload, NodeKind, NodeView, Oracle, Patch, SourceFlux,
     SourceLight, Transport, link_stream,
 };
-use radlab_scene::Rgb;
+use radlab_kernels::open_fraction::{DEFAULT_OPEN_RAYS, point_sealed};
+use radlab_scene::sampling::mix64;
+use radlab_scene::{Rgb, Scene};
 use radlab_visibility::Accel;
 
 use crate::basis::{Basis, CHILD_CELLS, TwoScale};
@@ -154,6 +174,8 @@ pub struct WaveletTransport<'a, const K: usize> {
     gather: WaveletGather,
     seed: u64,
     two_scale: TwoScale,
+    /// The scene whose leaves' open shares are estimated ([`WaveletTransport::with_open_shares`]), if any.
+    open_shares: Option<&'a Scene>,
 }
 
 impl<'a, const K: usize> WaveletTransport<'a, K> {
@@ -180,7 +202,17 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
             gather,
             seed,
             two_scale: TwoScale::new(basis),
+            open_shares: None,
         }
+    }
+
+    /// The same transport estimating every leaf's open share in `scene` (the scene the accelerator was built
+    /// from): the quadrature-weighted share of its receiver nodes that radlab-kernels' [`point_sealed`] finds
+    /// open (8 cosine rays a node through the counted accelerator, the stream keyed by the leaf and node). The engine then holds each leaf's coefficients over its
+    /// open part, per leaf (the crate's `transport` module).
+    pub fn with_open_shares(mut self, scene: &'a Scene) -> Self {
+        self.open_shares = Some(scene);
+        self
     }
 
     /// The basis.
@@ -324,6 +356,36 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
     ) -> Self::Flux {
         let s = link.source as usize;
         Self::full(b[s], &x[s])
+    }
+
+    /// The quadrature-weighted share of the leaf's receiver nodes (its [`ElementRule`], where its tensors
+    /// sample visibility) that are open: [`point_sealed`] with 8 cosine rays at each node.
+    fn open_share(&self, leaf: &Patch) -> Option<f64> {
+        let scene = self.open_shares?;
+        let rule = ElementRule::<K>::new(leaf, self.basis, self.points);
+        let (mut open, mut total) = (0.0, 0.0);
+        for (k, (y, w, _)) in rule.nodes.iter().enumerate() {
+            let key = mix64(leaf.key() ^ mix64(k as u64));
+            let (sealed, _rays) = point_sealed(
+                scene,
+                self.accel,
+                leaf.face,
+                *y,
+                DEFAULT_OPEN_RAYS,
+                self.seed,
+                key,
+            );
+            total += w;
+            if !sealed {
+                open += w;
+            }
+        }
+        Some(if total > 0.0 { open / total } else { 1.0 })
+    }
+
+    /// The mean-to-mean entry T_00 (the link's form factor at the target, V F), as a patch's V F.
+    fn coefficient_weight(&self, c: &Self::Coefficient) -> f64 {
+        (c[0][0] as f64).max(0.0)
     }
 
     fn deliver(&self, h: &mut Self::Irradiance, c: &Self::Coefficient, flux: Self::Flux) {
