@@ -18,9 +18,9 @@
 //!
 //! The estimate: `side` × `side` stratified points on the element, each casting `rays` cosine-distributed
 //! rays ignoring its own face. A point is sealed when every ray hits the back of a face (one-sided faces
-//! absorb at their backs, so such a point receives nothing) or a face the point touches (t = 0); a ray that
-//! escapes the scene or reaches a front face leaves the point open. A point answer's test ([`point_sealed`])
-//! also closes rays at front faces nearer than a small gap. o is the open share of the points ([`open_share`]); as an open fraction
+//! absorb at their backs, so such a point receives nothing); a ray that escapes the scene or reaches a front
+//! face leaves the point open. A point answer's test ([`point_sealed`]) also closes rays at faces nearer than a
+//! small gap (a cube's bottom face lying on the floor). o is the open share of the points ([`open_share`]); as an open fraction
 //! ([`open_fraction`], what matrix and progressive radiosity solve with) an element with no open point is
 //! left at o = 1 (it receives next to nothing, so there is nothing to correct). The random stream is a
 //! function of (seed, key) only.
@@ -70,7 +70,7 @@ pub fn open_share(
             }
             let d = sampling::cosine_hemisphere(n, u1, u2);
             cast += 1;
-            if ray_opens(scene, accel, face, y, d, 0.0) {
+            if ray_opens(scene, accel, face, y, d, f64::NEG_INFINITY) {
                 sealed = false;
             }
         }
@@ -82,11 +82,12 @@ pub fn open_share(
 }
 
 /// Whether the probe ray from `y` on `face` along `d` leaves the point open: it escapes the scene, or meets
-/// the front of a face farther than `gap`. A face's back absorbs (one-sided faces), and a hit at t ≤ `gap`
-/// closes the ray whichever way that face looks: t = 0 is a surface the point lies on, entered through its
-/// back-facing side (`Accel`'s contact rule: the bottom of a box resting on the floor, seen from the floor
-/// under it), and the two touch, so no light passes between them. [`open_share`] takes `gap` = 0 (contacts
-/// only), [`point_sealed`] [`SEAL_GAP_REL`] of the scene's diagonal.
+/// the front of a face farther than `gap`. A face's back absorbs (one-sided faces); a hit at t ≤ `gap` closes
+/// the ray whichever way that face looks (a face the point lies against: a cube's bottom face on the floor).
+/// [`point_sealed`] takes `gap` = [`SEAL_GAP_REL`] of the scene's diagonal. [`open_share`] takes no gap
+/// (−∞): treating contacts at t = 0 as sealed there let light into the closed unlit interiors of boxes flush
+/// against walls in the conformance suite (matrix, progressive, hierarchical and mesh Monte Carlo radiosity,
+/// 3e-4 to 1.7e-2 where 0 is exact), so element shares keep the front/back rule alone until that is understood.
 fn ray_opens(
     scene: &Scene,
     accel: &Accel,
@@ -218,44 +219,6 @@ mod tests {
         let bare = covered_floor(-0.5, 1e-3);
         let accel = Accel::new(&bare);
         assert_eq!(open_share(&bare, &accel, &bare.polygon(0), 0, 7, 0).0, 1.0);
-    }
-
-    /// A 2 × 2 floor facing up with a unit box (outward faces, bottom included) resting on it, with no gap,
-    /// over x, z < 1: a quarter of the floor and all of the box's bottom touch.
-    fn box_on_floor() -> Scene {
-        let mut b = SceneBuilder::new("box on floor");
-        let m = b
-            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
-            .expect("add");
-        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
-        let mut quad = |o: DVec3, u: DVec3, v: DVec3| {
-            b.add_polygon_points(&[o, o + u, o + u + v, o + v], m, "quad")
-                .expect("quad");
-        };
-        quad(DVec3::ZERO, 2.0 * z, 2.0 * x); // floor, +y
-        quad(DVec3::ZERO, x, z); // box bottom, -y (face 1)
-        quad(y, z, x); // top, +y
-        quad(DVec3::ZERO, y, x); // z = 0, -z
-        quad(z, x, y); // z = 1, +z
-        quad(DVec3::ZERO, z, y); // x = 0, -x
-        quad(x, y, z); // x = 1, +x
-        b.build().expect("scene")
-    }
-
-    #[test]
-    fn a_box_resting_on_a_floor_seals_the_floor_under_it_and_its_own_bottom() {
-        // Rays leaving the floor under the box meet the box's bottom at t = 0 (the accelerator's contact
-        // rule), from its front: the two surfaces touch, so no light reaches either. The floor is a quarter
-        // sealed (4 of its 16 stratified points lie under the box), the bottom wholly; the box's sides, which
-        // see the floor beside them, are open.
-        let scene = box_on_floor();
-        let accel = Accel::new(&scene);
-        let share = |f: usize| open_share(&scene, &accel, &scene.polygon(f), f, 7, f as u64).0;
-        assert_eq!(share(0), 0.75);
-        assert_eq!(share(1), 0.0);
-        for f in 2..7 {
-            assert_eq!(share(f), 1.0, "face {f}");
-        }
     }
 
     #[test]

@@ -277,6 +277,16 @@ fn catalogues_list_everything() {
     for m in ["matrix", "pathtrace", "element_size"] {
         assert!(t.contains(m), "methods lacks {m}");
     }
+    // It points to the table of every method's errors and times at its defaults, which exists.
+    assert!(
+        t.contains("docs/defaults.md"),
+        "methods does not point to docs/defaults.md"
+    );
+    assert!(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../docs/defaults.md")
+            .is_file()
+    );
     let o = radlab(tmp.path(), &["scenes"]);
     let t = text(&o);
     for s in [

@@ -32,4 +32,8 @@ pub fn methods() {
         print_params(&(m.params)());
         println!();
     }
+    println!(
+        "Each method's error and time at its defaults on a suite of scene kinds nobody tuned on \
+         (experiments/defaults-suite.toml), and where the defaults fall short: docs/defaults.md."
+    );
 }
