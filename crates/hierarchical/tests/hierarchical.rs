@@ -736,7 +736,7 @@ fn a_solve_at_its_step_cap_says_so() {
 
 #[test]
 fn a_floor_gathers_the_side_of_a_cube_whose_plane_its_samples_miss() {
-    // The cube's x = 2 side (face 9) stands a little above the floor (face 0), which is one 2.5 × 2.5 quad:
+    // The cube's x = 2 side (face 9) stands a little above the floor (face 4), which is one 2.5 × 2.5 quad:
     // the floor's Gauss points and centroid all lie on the far side of that side's plane (x < 2), yet the
     // floor beyond it (x > 2) sees it whole, unoccluded (no leaf is sealed, so no open share intervenes). Each floor leaf there must gather exactly its own kernel mean toward the side,
     // F = mean over its Gauss points of the point-to-polygon factor (closed form): a link dropped because
@@ -756,7 +756,7 @@ fn a_floor_gathers_the_side_of_a_cube_whose_plane_its_samples_miss() {
     for i in 0..e.nodes().len() as u32 {
         let n = &e.nodes()[i as usize];
         let c = n.centroid;
-        if !e.is_leaf(i) || n.face != 0 || c.x < 2.0 || !(1.0..2.0).contains(&c.z) {
+        if !e.is_leaf(i) || n.face != 4 || c.x < 2.0 || !(1.0..2.0).contains(&c.z) {
             continue;
         }
         if n.polygon.vertices().iter().any(|v| v.x < 2.0) {

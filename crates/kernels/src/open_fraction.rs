@@ -182,8 +182,9 @@ mod tests {
     use glam::DVec3;
     use radlab_scene::{Material, SceneBuilder};
 
-    /// A 2 × 2 floor facing up with a one-sided panel `gap` above it covering x < `cover`, facing up too.
-    fn covered_floor(cover: f64, gap: f64) -> Scene {
+    /// A 2 × 2 floor facing up with a one-sided panel `gap` above it covering x < `cover`, facing up (or
+    /// down, toward the floor, as a cube's bottom face lying on a floor).
+    fn covered_floor(cover: f64, gap: f64, facing_down: bool) -> Scene {
         let mut b = SceneBuilder::new("covered");
         let m = b
             .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
@@ -198,8 +199,11 @@ mod tests {
         };
         b.add_polygon_points(&q(0.0, 2.0, 0.0), m, "floor")
             .expect("floor");
-        b.add_polygon_points(&q(-1.0, cover, gap), m, "panel")
-            .expect("panel");
+        let mut panel = q(-1.0, cover, gap);
+        if facing_down {
+            panel.reverse();
+        }
+        b.add_polygon_points(&panel, m, "panel").expect("panel");
         b.build().expect("scene")
     }
 
@@ -207,7 +211,7 @@ mod tests {
     fn the_covered_share_of_a_floor_is_sealed() {
         // The panel covers x < 0.5 of the floor [0, 2] a millimetre above it: the floor as one element is a
         // quarter sealed; 16 points on a 4 × 4 grid resolve x < 0.5 exactly (one column of points).
-        let scene = covered_floor(0.5, 1e-3);
+        let scene = covered_floor(0.5, 1e-3, false);
         let accel = Accel::new(&scene);
         let poly = scene.polygon(0);
         let (o, rays) = open_share(&scene, &accel, &poly, 0, 7, 0);
@@ -216,7 +220,7 @@ mod tests {
         // The panel itself is open, and so is a floor nothing covers.
         let (o, _) = open_share(&scene, &accel, &scene.polygon(1), 1, 7, 1);
         assert_eq!(o, 1.0);
-        let bare = covered_floor(-0.5, 1e-3);
+        let bare = covered_floor(-0.5, 1e-3, false);
         let accel = Accel::new(&bare);
         assert_eq!(open_share(&bare, &accel, &bare.polygon(0), 0, 7, 0).0, 1.0);
     }
@@ -226,7 +230,7 @@ mod tests {
         // The panel covers x < 0.5 of the floor a millimetre above it: every point under it sees only the
         // panel's back (32 rays); a point a centimetre beside it, or on the panel, is open at its first ray
         // or after a few.
-        let scene = covered_floor(0.5, 1e-3);
+        let scene = covered_floor(0.5, 1e-3, false);
         let accel = Accel::new(&scene);
         for x in [0.05, 0.25, 0.45] {
             let y = DVec3::new(x, 0.0, 1.0);
@@ -259,24 +263,7 @@ mod tests {
         // The panel 1e-4 above the floor faces down (its front toward the floor, as a cube's bottom face
         // lying on a floor): the floor under it sees only a front 1e-4 away, below the gap of
         // SEAL_GAP_REL × the diagonal (3.6e-3); beside it, the floor is open.
-        let mut b = SceneBuilder::new("gap");
-        let m = b
-            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
-            .expect("add");
-        let q = |x0: f64, x1: f64, y: f64| {
-            vec![
-                DVec3::new(x0, y, 0.0),
-                DVec3::new(x0, y, 2.0),
-                DVec3::new(x1, y, 2.0),
-                DVec3::new(x1, y, 0.0),
-            ]
-        };
-        b.add_polygon_points(&q(0.0, 2.0, 0.0), m, "floor")
-            .expect("floor");
-        let mut down = q(-1.0, 0.5, 1e-4);
-        down.reverse();
-        b.add_polygon_points(&down, m, "panel").expect("panel");
-        let scene = b.build().expect("scene");
+        let scene = covered_floor(0.5, 1e-4, true);
         let accel = Accel::new(&scene);
         assert!(scene.faces[1].normal.y < 0.0);
         let at = |x: f64| {
@@ -289,7 +276,7 @@ mod tests {
 
     #[test]
     fn a_fully_covered_element_is_left_alone_and_elements_resolve_the_edge() {
-        let scene = covered_floor(1.0, 1e-3);
+        let scene = covered_floor(1.0, 1e-3, false);
         let accel = Accel::new(&scene);
         for (i, element) in scene.polygon(0).subdivide(0.5).iter().enumerate() {
             let (o, _) = open_share(&scene, &accel, element, 0, 3, i as u64);

@@ -71,6 +71,17 @@ pub struct SurfacePoint {
     pub normal: DVec3,
 }
 
+impl SurfacePoint {
+    /// The point `point` on face `face` of `scene`, gathering over the face's front.
+    pub fn on_face(scene: &Scene, face: FaceId, point: DVec3) -> Self {
+        Self {
+            face,
+            point,
+            normal: scene.faces[face].normal,
+        }
+    }
+}
+
 impl From<&radlab_method::EvalPoint> for SurfacePoint {
     fn from(p: &radlab_method::EvalPoint) -> Self {
         Self {

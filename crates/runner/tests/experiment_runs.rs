@@ -317,6 +317,51 @@ fn crash_timeout_and_memory_limit_are_recorded() {
 }
 
 #[test]
+fn a_run_killed_for_time_keeps_the_steps_it_measured() {
+    // Path tracing doubles its paths every step toward 2^26 a point, far past what 4 s allows; killed in a
+    // step, the run keeps its last evaluation: its errors, trace and points files, with the outcome timeout.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let body = TINY
+        .replace(
+            "[[scenes]]\nscene = \"builtin:cornell\"\nlabel = \"cornell\"\n",
+            "",
+        )
+        .replace("time_limit = 20", "time_limit = 1000\nkill_after = 4")
+        .replace(
+            "method = \"matrix\"\nparams = { visibility = \"centre\", quadrature = 1 }\n\
+             sweep = { iteration = [\"jacobi\", \"conjugate-gradient\"] }",
+            "method = \"pathtrace\"\nparams = { initial_samples = 1, samples = 67108864 }",
+        );
+    let cfg = write_config(tmp.path(), "killed.toml", &body);
+    let out = tmp.path().join("killed");
+    run_ok(tmp.path(), &cfg, &out);
+    let rdr = csv::Reader::from_path(out.join("runs.csv")).expect("runs.csv");
+    let runs: Vec<radlab_runner::experiment::execute::RunResult> =
+        rdr.into_deserialize().map(|r| r.expect("row")).collect();
+    assert_eq!(runs.len(), 1);
+    let r = &runs[0];
+    assert_eq!(r.outcome, "timeout", "{}", r.message);
+    assert!(
+        r.message
+            .contains(&format!("figures are those of step {}", r.steps)),
+        "{}",
+        r.message
+    );
+    assert!(r.steps >= 1 && r.l1.is_finite() && r.wall_s > 0.0, "{r:?}");
+    let trace = csv_rows(&out.join("trace.csv"));
+    assert!(!trace.is_empty(), "the kept trace");
+    let points = csv_rows(&radlab_runner::experiment::execute::points_path(
+        &out, &r.id,
+    ));
+    assert_eq!(points.len(), 48);
+    let partial = radlab_runner::experiment::execute::partial_path(&out, &r.id);
+    assert!(
+        !partial.exists(),
+        "the partial result is folded into the run's"
+    );
+}
+
+#[test]
 fn config_errors_name_the_key() {
     let tmp = tempfile::tempdir().expect("tmp");
     let cases = [

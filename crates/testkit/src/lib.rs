@@ -90,31 +90,21 @@ pub fn room(name: &str, extra: &dyn Fn(&mut SceneBuilder)) -> Scene {
 /// with no gap, its bottom touching it), every face of reflectance `rho` and emission `e`. Every point light
 /// can reach has B = E/(1 − ρ); a resting cube's bottom and the floor under it receive nothing. The floor's
 /// 2 × 2 Gauss points (x, z ≈ 0.53, 1.97) and centroid all lie behind the planes of the cube's x = 2 and
-/// z = 2 sides, which the floor beyond them sees. Faces: the room's y = 0, y = 2, x = 0, x = 2.5, z = 0,
-/// z = 2.5 (0–5), then the cube's bottom, top, x = 1, x = 2, z = 1, z = 2 (6–11).
+/// z = 2 sides, which the floor beyond them sees. Faces in [`box_sides`] order: the room's z = 0, z = 2.5,
+/// x = 0, x = 2.5, y = 0 (the floor, 4), y = 2 (0–5), then the cube's z = 1, z = 2, x = 1, x = 2 (9),
+/// bottom, top (6–11).
 pub fn furnace_with_cube(rho: f64, e: f64, lift: f64) -> Scene {
     let mut b = SceneBuilder::new("furnace with a cube");
     let m = material(&mut b, "furnace", rho, e);
-    let (w, h) = (2.5, 2.0);
-    let l = lift;
-    let sides = [
-        (dvec3(0., 0., 0.), dvec3(0., 0., w), dvec3(w, 0., 0.)), // floor, +y
-        (dvec3(0., h, 0.), dvec3(w, 0., 0.), dvec3(0., 0., w)),  // ceiling, -y
-        (dvec3(0., 0., 0.), dvec3(0., h, 0.), dvec3(0., 0., w)), // x = 0, +x
-        (dvec3(w, 0., 0.), dvec3(0., 0., w), dvec3(0., h, 0.)),  // x = w, -x
-        (dvec3(0., 0., 0.), dvec3(w, 0., 0.), dvec3(0., h, 0.)), // z = 0, +z
-        (dvec3(0., 0., w), dvec3(0., h, 0.), dvec3(w, 0., 0.)),  // z = w, -z
-        (dvec3(1., l, 1.), dvec3(1., 0., 0.), dvec3(0., 0., 1.)), // cube bottom, -y
-        (dvec3(1., l + 1., 1.), dvec3(0., 0., 1.), dvec3(1., 0., 0.)), // top, +y
-        (dvec3(1., l, 1.), dvec3(0., 0., 1.), dvec3(0., 1., 0.)), // x = 1, -x
-        (dvec3(2., l, 1.), dvec3(0., 1., 0.), dvec3(0., 0., 1.)), // x = 2, +x
-        (dvec3(1., l, 1.), dvec3(0., 1., 0.), dvec3(1., 0., 0.)), // z = 1, -z
-        (dvec3(1., l, 2.), dvec3(1., 0., 0.), dvec3(0., 1., 0.)), // z = 2, +z
-    ];
-    for (o, u, v) in sides {
-        b.add_polygon_points(&[o, o + u, o + u + v, o + v], m, "furnace")
-            .expect("quad");
-    }
+    add_box(&mut b, DVec3::ZERO, dvec3(2.5, 2.0, 2.5), 1, m, false);
+    add_box(
+        &mut b,
+        dvec3(1., lift, 1.),
+        dvec3(2., 1. + lift, 2.),
+        1,
+        m,
+        true,
+    );
     b.build().expect("scene")
 }
 

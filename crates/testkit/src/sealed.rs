@@ -6,7 +6,7 @@
 //! points).
 
 use glam::{DVec3, dvec3};
-use radlab_scene::{FaceId, Scene};
+use radlab_scene::{FaceId, Rgb, Scene};
 
 use crate::{box_sides, material, room};
 
@@ -72,4 +72,85 @@ pub fn beside_points(scene: &Scene) -> Vec<(FaceId, DVec3)> {
         out.push(on_floor(scene, t, b));
     }
     out
+}
+
+/// An independent reference at points of a scene's faces: for each, the mean radiosity and its standard error
+/// (e.g. the path tracer's `estimate_points`, which testkit cannot call: it is a dependency of the path
+/// tracer's tests).
+pub type Reference<'a> = dyn Fn(&Scene, &[(FaceId, DVec3)]) -> Vec<(Rgb, Rgb)> + 'a;
+
+/// [`block_on_floor`] with its reference beside the block: what a method's answers there are judged against.
+pub struct SealedCase {
+    /// The scene.
+    pub scene: Scene,
+    sealed: Vec<(FaceId, DVec3)>,
+    beside: Vec<(FaceId, DVec3)>,
+    reference: Vec<(Rgb, Rgb)>,
+}
+
+impl SealedCase {
+    /// The case, with `reference` evaluated beside the block. Panics if the reference lights a sealed point
+    /// (a path tracer must answer exactly 0 there, with zero variance: every ray meets a back).
+    pub fn new(reference: &Reference) -> Self {
+        let scene = block_on_floor();
+        let (sealed, beside) = (sealed_points(&scene), beside_points(&scene));
+        for (mean, _) in reference(&scene, &sealed) {
+            assert_eq!(
+                mean.max_element(),
+                0.0,
+                "the reference lights a sealed point"
+            );
+        }
+        let reference = reference(&scene, &beside);
+        Self {
+            scene,
+            sealed,
+            beside,
+            reference,
+        }
+    }
+
+    /// The failures of a method's `answer` (radiosity at a point of a face): a sealed point answering more
+    /// than 1e-3 of the mean radiosity beside the block; and, when the answer `resolves_shadows` (a final
+    /// gather), a relative L1 difference beside the block above twice the reference's summed standard
+    /// errors (a difference that is the reference's noise alone averages E|N(0, σ)| ≈ 0.8 σ a point).
+    /// Prints the figures under `label`.
+    pub fn judge(
+        &self,
+        label: &str,
+        answer: &dyn Fn(FaceId, DVec3) -> Rgb,
+        resolves_shadows: bool,
+    ) -> Vec<String> {
+        let lit = self
+            .reference
+            .iter()
+            .map(|(m, _)| m.element_sum())
+            .sum::<f64>()
+            / (3.0 * self.reference.len() as f64);
+        let worst_sealed = self
+            .sealed
+            .iter()
+            .map(|&(f, p)| answer(f, p).max_element())
+            .fold(0.0, f64::max);
+        let (mut diff, mut sum, mut se) = (0.0, 0.0, 0.0);
+        for (&(f, p), (mean, std_error)) in self.beside.iter().zip(&self.reference) {
+            diff += (answer(f, p) - *mean).abs().element_sum();
+            sum += mean.element_sum();
+            se += std_error.element_sum();
+        }
+        eprintln!(
+            "{label}: worst sealed point {worst_sealed:.4} (beside mean {lit:.4}); beside: relative L1 \
+             {:.4}, reference standard error {:.5}",
+            diff / sum,
+            se / sum
+        );
+        let mut failures = Vec::new();
+        if resolves_shadows && diff > 2.0 * se {
+            failures.push(format!("{label} beside the block: L1 {diff} > 2 × {se}"));
+        }
+        if worst_sealed > 1e-3 * lit {
+            failures.push(format!("{label}: a sealed point answers {worst_sealed}"));
+        }
+        failures
+    }
 }

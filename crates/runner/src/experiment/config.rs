@@ -123,7 +123,8 @@ pub struct LimitsConfig {
     pub isolate: bool,
     /// Memory limit of a child process, MiB (0 = none).
     pub memory_limit_mib: u64,
-    /// Wall seconds after which a child is killed (0 = 2 × time_limit + 60).
+    /// Wall seconds after which a child is killed (0 = 2 × time_limit + 60), evaluations and set-up included.
+    /// A killed run keeps its last evaluation, with the outcome `timeout`.
     pub kill_after: f64,
 }
 

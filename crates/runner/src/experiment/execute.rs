@@ -203,6 +203,12 @@ pub fn trace_path(dir: &Path, id: &str) -> PathBuf {
     dir.join("runs").join(format!("{id}.trace.csv"))
 }
 
+/// Path of a run's last completed evaluation while it runs in a child process: what is kept of it if the child
+/// is killed (its trace and points files are written with it).
+pub fn partial_path(dir: &Path, id: &str) -> PathBuf {
+    dir.join("runs").join(format!("{id}.partial.json"))
+}
+
 /// Path of a run's per-point answers (the final evaluation beside the reference).
 pub fn points_path(dir: &Path, id: &str) -> PathBuf {
     dir.join("runs").join(format!("{id}.points.csv"))
@@ -382,6 +388,7 @@ pub fn execute(job: &Job) -> Result<RunResult> {
     }
     result.peak_rss_bytes = solve_loop::peak_rss_bytes().unwrap_or(0);
     write_result(&job.dir, &result)?;
+    let _ = std::fs::remove_file(partial_path(&job.dir, &result.id));
     Ok(result)
 }
 
@@ -415,6 +422,9 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let mut last_values = Vec::new();
     // The after-step hook evaluates outside the solver's timed region, timing the answering separately;
     // reaching the target error ends the run.
+    // In a child process every evaluation is also written as the run's partial result, with its trace and
+    // points so far: a child killed for time (limits.kill_after) in a later step keeps what it measured.
+    let mut partial = result.clone();
     let run = solve_loop::run(&mut *solver, limits, |s, rec| {
         let wall = rec.wall.as_secs_f64();
         if (rec.step % every == 0 && wall >= next_eval) || rec.step == 1 {
@@ -424,6 +434,22 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             last_values = values;
             trace.push(row(spec, rec, last_eval, last_answer));
             next_eval = wall * growth;
+            if job.limits.isolate {
+                record(&mut partial, rec, last_eval, last_answer, s);
+                partial.peak_rss_bytes = solve_loop::peak_rss_bytes().unwrap_or(0);
+                write_trace(&job.dir, &partial.id, &trace)?;
+                write_points(
+                    &points_path(&job.dir, &partial.id),
+                    &points,
+                    &reference,
+                    &std_error,
+                    &last_values,
+                    &weights,
+                )?;
+                write_bytes(&partial_path(&job.dir, &partial.id), |w| {
+                    Ok(serde_json::to_writer_pretty(w, &partial)?)
+                })?;
+            }
             if target > 0.0 && last_eval.l1 <= target {
                 anyhow::bail!(TargetReached);
             }
@@ -450,44 +476,9 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         last_values = values;
         trace.push(row(spec, &rec, last_eval, last_answer));
     }
-    // Memory is read once the solution has answered, so it holds what answering built, as its time and rays do.
-    (
-        result.answer_s,
-        result.answer_rays,
-        result.answer_form_factors,
-        result.bytes,
-    ) = (
-        last_answer.secs,
-        last_answer.rays,
-        last_answer.kernels,
-        last_answer.bytes,
-    );
+    record(result, &rec, last_eval, last_answer, &*solver);
     result.outcome = outcome;
-    result.steps = rec.step;
-    result.wall_s = rec.wall.as_secs_f64();
-    result.cpu_s = rec.cpu.as_secs_f64();
-    let st = rec.stats;
-    (
-        result.elements,
-        result.links,
-        result.form_factors,
-        result.rays,
-    ) = (st.elements, st.links, st.form_factors, st.rays);
-    result.counters = solver
-        .counters()
-        .iter()
-        .map(|(name, value)| format!("{name}={value}"))
-        .collect::<Vec<_>>()
-        .join(";");
-    (result.l1, result.l2, result.max) = (last_eval.l1, last_eval.l2, last_eval.max);
-    write_bytes(&trace_path(&job.dir, &result.id), |w| {
-        let mut out = csv::Writer::from_writer(w);
-        for t in &trace {
-            out.serialize(t)?;
-        }
-        out.flush()?;
-        Ok(())
-    })?;
+    write_trace(&job.dir, &result.id, &trace)?;
     write_points(
         &points_path(&job.dir, &result.id),
         &points,
@@ -529,6 +520,52 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         write_exr(&image_path(&job.dir, &result.id), &image)?;
     }
     Ok(())
+}
+
+/// Fills a run's result from its last step and evaluation. Memory is read once the solution has answered,
+/// so it holds what answering built, as its time and rays do.
+fn record(
+    result: &mut RunResult,
+    rec: &solve_loop::StepRecord,
+    e: Errors,
+    answer: Answering,
+    solver: &dyn Solver,
+) {
+    (
+        result.answer_s,
+        result.answer_rays,
+        result.answer_form_factors,
+        result.bytes,
+    ) = (answer.secs, answer.rays, answer.kernels, answer.bytes);
+    result.steps = rec.step;
+    result.wall_s = rec.wall.as_secs_f64();
+    result.cpu_s = rec.cpu.as_secs_f64();
+    let st = rec.stats;
+    (
+        result.elements,
+        result.links,
+        result.form_factors,
+        result.rays,
+    ) = (st.elements, st.links, st.form_factors, st.rays);
+    result.counters = solver
+        .counters()
+        .iter()
+        .map(|(name, value)| format!("{name}={value}"))
+        .collect::<Vec<_>>()
+        .join(";");
+    (result.l1, result.l2, result.max) = (e.l1, e.l2, e.max);
+}
+
+/// Writes a run's trace (atomically).
+fn write_trace(dir: &Path, id: &str, trace: &[TraceRow]) -> Result<()> {
+    write_bytes(&trace_path(dir, id), |w| {
+        let mut out = csv::Writer::from_writer(w);
+        for t in trace {
+            out.serialize(t)?;
+        }
+        out.flush()?;
+        Ok(())
+    })
 }
 
 #[derive(Debug)]
@@ -613,7 +650,15 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
     let job_file = job.dir.join("runs").join(format!("{id}.job.json"));
     write_bytes(&job_file, |w| Ok(serde_json::to_writer(w, job)?))?;
     let result_file = result_path(&job.dir, &id);
-    let _ = std::fs::remove_file(&result_file);
+    let partial_file = partial_path(&job.dir, &id);
+    for stale in [
+        &result_file,
+        &partial_file,
+        &trace_path(&job.dir, &id),
+        &points_path(&job.dir, &id),
+    ] {
+        let _ = std::fs::remove_file(stale);
+    }
     let exe = std::env::current_exe()
         .context("cannot find the radlab executable to run a child process")?;
     let mut cmd = Command::new(exe);
@@ -649,12 +694,21 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
     let err_text = reader.join().unwrap_or_default();
     let _ = std::fs::remove_file(&job_file);
     let written = read_result(&result_file);
+    let partial = read_result(&partial_file).ok();
+    let _ = std::fs::remove_file(&partial_file);
     if let (Some(st), Ok(r)) = (status, &written)
         && (st.success() || r.outcome == "out-of-memory")
     {
         return Ok(r.clone());
     }
-    let mut r = base_result(job);
+    // A child that was killed or crashed after an evaluation keeps it (its trace and points are on disk).
+    let mut r = partial.clone().unwrap_or_else(|| base_result(job));
+    let kept = partial.map_or(String::new(), |p| {
+        format!(
+            "; the figures are those of step {} ({:.1} s of steps), its last evaluation",
+            p.steps, p.wall_s
+        )
+    });
     // The panic message if there is one (the line after "panicked at"), otherwise the last lines of stderr.
     let lines: Vec<&str> = err_text.lines().collect();
     let tail = match lines.iter().position(|l| l.contains("panicked at")) {
@@ -665,7 +719,7 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
         None => {
             r.outcome = "timeout".into();
             r.message = format!(
-                "killed after {:.0} s (limits.kill_after)",
+                "killed after {:.0} s (limits.kill_after){kept}",
                 job.limits.kill_after_secs()
             );
         }
@@ -675,7 +729,7 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
                 (true, Err(e)) => {
                     format!("child exited with {st} but left no readable result: {e:#}")
                 }
-                _ => format!("child exited with {st}: {tail}"),
+                _ => format!("child exited with {st}: {tail}{kept}"),
             };
         }
     }
