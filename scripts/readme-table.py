@@ -18,7 +18,7 @@ for r in csv.DictReader(open(path)):
     else:
         setting = sweep or "defaults"
     rays = (int(r["rays"]) + int(r["answer_rays"] or 0)) / 1e6
-    time = float(r["wall_s"]) + float(r["answer_s"] or 0)
+    time = float(r["setup_s"] or 0) + float(r["wall_s"]) + float(r["answer_s"] or 0)
     print(
         f"| {r['label']} | {setting} | {int(r['elements']):,} | {rays:.2f} M | {time:.2f} s | "
         f"{100 * float(r['l1']):.1f}% | {100 * float(r['max']):.0f}% | {int(r['bytes']) / 2**20:.2f} MiB |"

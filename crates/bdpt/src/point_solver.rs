@@ -29,6 +29,8 @@ pub struct BdptSolver<'a> {
     accel: &'a Accel,
     params: BdptParams,
     runs: SteppedPoints,
+    /// Built once: its emitter distribution costs O(faces), which answering per point must not pay again.
+    estimator: BidirectionalEstimator<'a>,
 }
 
 impl std::fmt::Debug for BdptSolver<'_> {
@@ -58,11 +60,19 @@ impl<'a> BdptSolver<'a> {
             params.initial_samples,
             params.samples,
         );
+        let estimator = BidirectionalEstimator::new(
+            scene,
+            accel,
+            params.max_depth,
+            params.max_light_vertices,
+            params.heuristic,
+        );
         Ok(Self {
             scene,
             accel,
             params,
             runs,
+            estimator,
         })
     }
 
@@ -75,21 +85,11 @@ impl<'a> BdptSolver<'a> {
     pub fn estimates(&self) -> Vec<PointEstimate> {
         self.runs.estimates()
     }
-
-    fn estimator(&self) -> BidirectionalEstimator<'a> {
-        BidirectionalEstimator::new(
-            self.scene,
-            self.accel,
-            self.params.max_depth,
-            self.params.max_light_vertices,
-            self.params.heuristic,
-        )
-    }
 }
 
 impl Solver for BdptSolver<'_> {
     fn step(&mut self) -> Result<Step, SolveError> {
-        let estimator = self.estimator();
+        let estimator = &self.estimator;
         self.runs
             .step(self.accel, &|p, rng| estimator.radiosity(p, rng))
     }
@@ -107,9 +107,8 @@ impl Solution for BdptSolver<'_> {
     /// The running mean at a query point; elsewhere a fresh estimate with the samples per point so far (at
     /// least `initial_samples`), from a stream keyed by the point.
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        let estimator = self.estimator();
         self.runs.radiosity_at(self.scene, face, point, &|p, rng| {
-            estimator.radiosity(p, rng)
+            self.estimator.radiosity(p, rng)
         })
     }
 }

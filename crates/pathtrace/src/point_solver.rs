@@ -248,6 +248,8 @@ pub struct PathTraceSolver<'a> {
     accel: &'a Accel,
     params: PathTraceParams,
     runs: SteppedPoints,
+    /// Built once: its emitter distribution costs O(faces), which answering per point must not pay again.
+    estimator: PathEstimator<'a>,
 }
 
 impl std::fmt::Debug for PathTraceSolver<'_> {
@@ -279,6 +281,7 @@ impl<'a> PathTraceSolver<'a> {
         Ok(Self {
             scene,
             accel,
+            estimator: PathEstimator::new(scene, accel, params.max_depth, params.direct),
             params,
             runs,
         })
@@ -307,12 +310,7 @@ impl<'a> PathTraceSolver<'a> {
 
 impl Solver for PathTraceSolver<'_> {
     fn step(&mut self) -> Result<Step, SolveError> {
-        let estimator = PathEstimator::new(
-            self.scene,
-            self.accel,
-            self.params.max_depth,
-            self.params.direct,
-        );
+        let estimator = &self.estimator;
         self.runs.step(self.accel, &|p, rng| {
             estimator.radiosity(p.face, p.point, p.normal, rng)
         })
@@ -331,14 +329,8 @@ impl Solution for PathTraceSolver<'_> {
     /// The running mean at a query point; elsewhere a fresh estimate with the paths per point so far (at least
     /// `initial_samples`), from a stream keyed by the point.
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
-        let estimator = PathEstimator::new(
-            self.scene,
-            self.accel,
-            self.params.max_depth,
-            self.params.direct,
-        );
         self.runs.radiosity_at(self.scene, face, point, &|p, rng| {
-            estimator.radiosity(p.face, p.point, p.normal, rng)
+            self.estimator.radiosity(p.face, p.point, p.normal, rng)
         })
     }
 }

@@ -139,6 +139,13 @@ pub struct RunResult {
     pub counters: String,
 }
 
+impl RunResult {
+    /// Time to answer at the evaluation points: set-up, steps and one answering pass.
+    pub fn time_to_answer(&self) -> f64 {
+        self.setup_s + self.wall_s + self.answer_s
+    }
+}
+
 /// One row of `trace.csv`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct TraceRow {
@@ -154,6 +161,10 @@ pub struct TraceRow {
     pub seed: u64,
     /// Step number.
     pub step: u64,
+    /// Wall seconds of the run's set-up (constructing the solver: hierarchy builds, preprocesses), counted in
+    /// every time to answer. Filled from the run's result when the tables are written.
+    #[serde(default)]
+    pub setup_s: f64,
     /// Wall seconds of steps so far.
     pub wall_s: f64,
     /// CPU seconds of steps so far.
@@ -185,6 +196,13 @@ pub struct TraceRow {
     pub l2: f64,
     /// Max relative error.
     pub max: f64,
+}
+
+impl TraceRow {
+    /// Time to answer at the evaluation points after this step: set-up, steps so far and one answering pass.
+    pub fn time_to_answer(&self) -> f64 {
+        self.setup_s + self.wall_s + self.answer_s
+    }
 }
 
 /// JSON has no NaN: serde_json writes it as `null`, which reads back as NaN here (the error of a run that
@@ -404,6 +422,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     let setup = std::time::Instant::now();
     let mut solver = (method.build)(&scene, &accel, spec.params.clone(), spec.seed, &points)?;
     result.setup_s = setup.elapsed().as_secs_f64();
+    let setup_s = result.setup_s;
     let limits = Limits {
         max_steps: job.limits.max_steps,
         time_limit: Duration::from_secs_f64(job.limits.time_limit),
@@ -432,7 +451,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             last_eval = e;
             last_answer = answering;
             last_values = values;
-            trace.push(row(spec, rec, last_eval, last_answer));
+            trace.push(row(spec, rec, setup_s, last_eval, last_answer));
             next_eval = wall * growth;
             if job.limits.isolate {
                 record(&mut partial, rec, last_eval, last_answer, s);
@@ -474,7 +493,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
         last_eval = e;
         last_answer = answering;
         last_values = values;
-        trace.push(row(spec, &rec, last_eval, last_answer));
+        trace.push(row(spec, &rec, setup_s, last_eval, last_answer));
     }
     record(result, &rec, last_eval, last_answer, &*solver);
     result.outcome = outcome;
@@ -578,7 +597,13 @@ impl std::fmt::Display for TargetReached {
 impl std::error::Error for TargetReached {}
 
 /// A trace row: the step's record, with its answering pass (and the bytes held after it).
-fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors, answer: Answering) -> TraceRow {
+fn row(
+    spec: &RunSpec,
+    rec: &solve_loop::StepRecord,
+    setup_s: f64,
+    e: Errors,
+    answer: Answering,
+) -> TraceRow {
     let st = rec.stats;
     TraceRow {
         id: spec.id(),
@@ -587,6 +612,7 @@ fn row(spec: &RunSpec, rec: &solve_loop::StepRecord, e: Errors, answer: Answerin
         sweep: spec.sweep.clone(),
         seed: spec.seed,
         step: rec.step,
+        setup_s,
         wall_s: rec.wall.as_secs_f64(),
         cpu_s: rec.cpu.as_secs_f64(),
         answer_s: answer.secs,

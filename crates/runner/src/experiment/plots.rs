@@ -6,7 +6,7 @@
 //! labelled with its value; the legend beside the plot area, never over data. Series take twelve colours, then
 //! the same colours again with triangles instead of circles, then with crosses, so that no two of 36 look alike. PNG and SVG come from one
 //! drawing routine, so they hold the same content. Time is the time to answer at the experiment's points: the
-//! solver's steps plus one answering pass (a final gather's cost). Text uses DejaVu Sans embedded in the
+//! solver's set-up, its steps and one answering pass (a final gather's cost). Text uses DejaVu Sans embedded in the
 //! binary, so no system font library is needed.
 
 use std::collections::BTreeMap;
@@ -348,7 +348,7 @@ pub fn scene_plots(
         by_run
             .entry(t.id.as_str())
             .or_default()
-            .push((t.wall_s + t.answer_s, t.l1));
+            .push((t.time_to_answer(), t.l1));
     }
     for r in &runs {
         if let Some(points) = by_run.remove(r.id.as_str()) {
@@ -396,7 +396,7 @@ pub fn scene_plots(
             "frontier",
             "speed/accuracy frontier",
             time_label.as_str(),
-            (&|r: &RunResult| r.wall_s + r.answer_s) as &dyn Fn(&RunResult) -> f64,
+            (&RunResult::time_to_answer) as &dyn Fn(&RunResult) -> f64,
         ),
         (
             "error-vs-rays",

@@ -3,10 +3,11 @@
 //! run outcomes, where path tracing and the finite-element methods cross, and the figures) and `meta.json` (the
 //! config as run, git commit, versions, threads, machine, start and end times).
 //!
-//! Time is time to answer: the solver's steps plus one answering pass at the points (a final gather's rays
-//! and time; path tracing does all its work in its steps). The crossover: at error level e, path tracing's
-//! cost is per point, t_pt(N) = a N with a = its time to e over the experiment's N points; a finite-element
-//! method's is t_fe(N) = s + g N with s its solving time to e and g its answering time per point. They are
+//! Time is time to answer: the solver's set-up (hierarchy builds, preprocesses), its steps and one answering
+//! pass at the points (a final gather's rays and time; path tracing does all its work in its steps). The
+//! crossover: at error level e, path tracing's cost is per point, t_pt(N) = a N with a = its time to e over the
+//! experiment's N points; a finite-element method's is t_fe(N) = s + g N with s its set-up and solving time to
+//! e and g its answering time per point. They are
 //! equal at N* = s / (a − g) (when a > g; otherwise path tracing is cheaper at every N); below N* path tracing
 //! is cheaper, above it the finite-element solution.
 
@@ -23,7 +24,7 @@ use crate::output::atomic::write_bytes;
 pub const THRESHOLDS: [f64; 3] = [0.10, 0.03, 0.01];
 
 /// The trace row at which a run of (scene, label) first answered with relative L1 ≤ `thr` at the least time to
-/// answer (solving plus one answering pass).
+/// answer (set-up, solving and one answering pass).
 pub fn row_to<'a>(
     trace: &'a [TraceRow],
     scene: &str,
@@ -33,13 +34,13 @@ pub fn row_to<'a>(
     trace
         .iter()
         .filter(|t| t.scene == scene && t.label == label && t.l1 <= thr)
-        .min_by(|a, b| (a.wall_s + a.answer_s).total_cmp(&(b.wall_s + b.answer_s)))
+        .min_by(|a, b| a.time_to_answer().total_cmp(&b.time_to_answer()))
 }
 
-/// Earliest time to answer (steps plus one answering pass) at which any run of (scene, label) reached relative
+/// Earliest time to answer (set-up, steps and one answering pass) at which any run of (scene, label) reached relative
 /// L1 ≤ `thr`.
 pub fn time_to(trace: &[TraceRow], scene: &str, label: &str, thr: f64) -> Option<f64> {
-    row_to(trace, scene, label, thr).map(|t| t.wall_s + t.answer_s)
+    row_to(trace, scene, label, thr).map(TraceRow::time_to_answer)
 }
 
 /// Where path tracing's cost, a per point, equals a finite-element method's, s + g per point: N* = s/(a − g).
@@ -58,7 +59,7 @@ pub struct Crossing {
     pub per_point: f64,
     /// The finite-element method (label) answering fastest at the experiment's point count.
     pub best: String,
-    /// Its solving time.
+    /// Its set-up and solving time.
     pub solve: f64,
     /// Its answering time per point.
     pub answer_per_point: f64,
@@ -90,17 +91,18 @@ pub fn crossings(
         let best = other_labels
             .iter()
             .filter_map(|l| row_to(trace, scene, l, level).map(|r| (l, r)))
-            .min_by(|a, b| (a.1.wall_s + a.1.answer_s).total_cmp(&(b.1.wall_s + b.1.answer_s)));
+            .min_by(|a, b| a.1.time_to_answer().total_cmp(&b.1.time_to_answer()));
         let Some((label, row)) = best else { continue };
         let a = pt / n;
         let g = row.answer_s / n;
+        let solve = row.setup_s + row.wall_s;
         out.push(Crossing {
             level,
             per_point: a,
             best: label.to_string(),
-            solve: row.wall_s,
+            solve,
             answer_per_point: g,
-            points: crossover(a, row.wall_s, g),
+            points: crossover(a, solve, g),
         });
     }
     out
@@ -145,7 +147,8 @@ pub fn markdown(
         let _ = writeln!(
             s,
             "## {scene}\n\nReference: {kind}; noise floor (relative L1) {floor:.2e}. Times are to answer at the \
-             {n} evaluation points: the solver's steps plus one answering pass (a final gather's cost). The max \
+             {n} evaluation points: the solver's set-up, its steps and one answering pass (a final gather's cost). \
+             The max \
              error is relative to max(|reference|, {:.0}% of the scene's area-mean reference radiosity) at each \
              point. The image error is the mean relative difference of the best run's image from the path-traced \
              reference image (path tracing's image is rendered at the paths per point it reached).\n",
@@ -189,7 +192,7 @@ pub fn markdown(
                 times[2],
                 best.map_or("—".into(), |b| format!("{:.2e}", b.l1)),
                 best.map_or("—".into(), |b| format!("{:.0}%", b.max * 100.0)),
-                fmt_time(best.map(|b| b.wall_s + b.answer_s)),
+                fmt_time(best.map(|b| b.time_to_answer())),
                 outcomes.join(", ")
             );
         }
@@ -207,12 +210,12 @@ pub fn markdown(
             let _ = writeln!(
                 s,
                 "\nWhere path tracing and the finite-element methods cross: path tracing pays per point, a \
-                 finite-element solution once for the scene (plus its answering per point). Below the crossover \
+                 finite-element solution (its set-up and solve) once for the scene, plus its answering per point. Below the crossover \
                  point count path tracing answers sooner; above it the finite-element method does.\n"
             );
             let _ = writeln!(
                 s,
-                "| error | path tracing per point | fastest other method at {n} points | its solve | its answer per point | crossover points |"
+                "| error | path tracing per point | fastest other method at {n} points | its set-up and solve | its answer per point | crossover points |"
             );
             let _ = writeln!(s, "|---|---|---|---|---|---|");
             for c in &cross {
@@ -361,6 +364,19 @@ mod tests {
             (c[1].points.expect("3%") - 1.9 / (0.04 - 0.001)).abs() < 1e-9,
             "{c:?}"
         );
+        // A set-up (a hierarchy build) counts in the time to answer and in the solve of the crossover: 2 s of
+        // set-up puts the 3% crossover at (2 + 1.9)/(0.04 − 0.001) = 100 points and matrix to 3% at 4 s.
+        let built: Vec<TraceRow> = trace
+            .iter()
+            .map(|t| TraceRow {
+                setup_s: if t.label == "matrix" { 2.0 } else { 0.0 },
+                ..t.clone()
+            })
+            .collect();
+        assert_eq!(time_to(&built, "s", "matrix", 0.03), Some(4.0));
+        let c = crossings(&built, "s", &["pathtrace"], &["matrix", "constant"], 100.0);
+        assert_eq!(c[1].solve, 3.9);
+        assert!((c[1].points.expect("3%") - 100.0).abs() < 1e-9, "{c:?}");
         // Path tracing no costlier per point than answering: no crossover.
         assert_eq!(crossover(0.001, 5.0, 0.002), None);
         assert_eq!(crossover(0.01, 0.0, 0.0), Some(0.0));

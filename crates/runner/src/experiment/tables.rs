@@ -46,7 +46,11 @@ pub fn write_tables(dir: &Path, results: &[RunResult]) -> Result<()> {
     for r in results {
         let p = super::execute::trace_path(dir, &r.id);
         if p.exists() {
-            rows.extend(read_trace(&p)?);
+            // The set-up is the run's (traces written before it was recorded per row read it as 0).
+            rows.extend(read_trace(&p)?.into_iter().map(|t| TraceRow {
+                setup_s: r.setup_s,
+                ..t
+            }));
         }
     }
     write_bytes(&dir.join("trace.csv"), |w| {
