@@ -444,6 +444,15 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     // In a child process every evaluation is also written as the run's partial result, with its trace and
     // points so far: a child killed for time (limits.kill_after) in a later step keeps what it measured.
     let mut partial = result.clone();
+    let id = result.id.clone();
+    let files = RunFiles {
+        dir: &job.dir,
+        id: &id,
+        points: &points,
+        reference: &reference,
+        std_error: &std_error,
+        weights: &weights,
+    };
     let run = solve_loop::run(&mut *solver, limits, |s, rec| {
         let wall = rec.wall.as_secs_f64();
         if (rec.step % every == 0 && wall >= next_eval) || rec.step == 1 {
@@ -456,16 +465,8 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             if job.limits.isolate {
                 record(&mut partial, rec, last_eval, last_answer, s);
                 partial.peak_rss_bytes = solve_loop::peak_rss_bytes().unwrap_or(0);
-                write_trace(&job.dir, &partial.id, &trace)?;
-                write_points(
-                    &points_path(&job.dir, &partial.id),
-                    &points,
-                    &reference,
-                    &std_error,
-                    &last_values,
-                    &weights,
-                )?;
-                write_bytes(&partial_path(&job.dir, &partial.id), |w| {
+                files.write(&trace, &last_values)?;
+                write_bytes(&partial_path(files.dir, files.id), |w| {
                     Ok(serde_json::to_writer_pretty(w, &partial)?)
                 })?;
             }
@@ -497,15 +498,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
     }
     record(result, &rec, last_eval, last_answer, &*solver);
     result.outcome = outcome;
-    write_trace(&job.dir, &result.id, &trace)?;
-    write_points(
-        &points_path(&job.dir, &result.id),
-        &points,
-        &reference,
-        &std_error,
-        &last_values,
-        &weights,
-    )?;
+    files.write(&trace, &last_values)?;
     if job.outputs.images
         && let Some(camera) = super::images::camera_for(&scene, &job.outputs)
     {
@@ -575,16 +568,37 @@ fn record(
     (result.l1, result.l2, result.max) = (e.l1, e.l2, e.max);
 }
 
-/// Writes a run's trace (atomically).
-fn write_trace(dir: &Path, id: &str, trace: &[TraceRow]) -> Result<()> {
-    write_bytes(&trace_path(dir, id), |w| {
-        let mut out = csv::Writer::from_writer(w);
-        for t in trace {
-            out.serialize(t)?;
-        }
-        out.flush()?;
-        Ok(())
-    })
+/// A run's trace and per-point files, and the fixed inputs of the second: its evaluation points, the reference
+/// with its standard error and the points' weights.
+struct RunFiles<'a> {
+    dir: &'a Path,
+    id: &'a str,
+    points: &'a [EvalPoint],
+    reference: &'a [Rgb],
+    std_error: &'a [Rgb],
+    weights: &'a [f64],
+}
+
+impl RunFiles<'_> {
+    /// Writes the trace so far and the answers `values` at the points beside the reference (each atomically).
+    fn write(&self, trace: &[TraceRow], values: &[Rgb]) -> Result<()> {
+        write_bytes(&trace_path(self.dir, self.id), |w| {
+            let mut out = csv::Writer::from_writer(w);
+            for t in trace {
+                out.serialize(t)?;
+            }
+            out.flush()?;
+            Ok(())
+        })?;
+        write_points(
+            &points_path(self.dir, self.id),
+            self.points,
+            self.reference,
+            self.std_error,
+            values,
+            self.weights,
+        )
+    }
 }
 
 #[derive(Debug)]
