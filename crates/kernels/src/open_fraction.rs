@@ -20,10 +20,10 @@
 //! rays ignoring its own face. A point is sealed when every ray hits the back of a face (one-sided faces
 //! absorb at their backs, so such a point receives nothing); a ray that escapes the scene or reaches a front
 //! face leaves the point open. A point answer's test ([`point_sealed`]) also closes rays at faces nearer than a
-//! small gap (a cube's bottom face lying on the floor). o is the open share of the points ([`open_share`]); as an open fraction
-//! ([`open_fraction`], what matrix and progressive radiosity solve with) an element with no open point is
-//! left at o = 1 (it receives next to nothing, so there is nothing to correct). The random stream is a
-//! function of (seed, key) only.
+//! small gap (a cube's bottom face lying on the floor). o is the open share of the points ([`open_share`]); as
+//! an open fraction ([`open_fraction`], what matrix and progressive radiosity solve with) an element with no
+//! open point is left at o = 1 (it receives next to nothing, so there is nothing to correct). The random
+//! stream is a function of (seed, key) only.
 
 use radlab_scene::polygon::Polygon;
 use radlab_scene::sampling::{self, mix64};

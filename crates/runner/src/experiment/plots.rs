@@ -4,10 +4,10 @@
 //! error against rays cast and against memory held. Log-log axes with ticks at 1-2-5 (or 1-3 for errors, shown as
 //! percentages: 1%, 3%, 10%) times powers of ten, each label once; the reference's noise floor as a dashed line
 //! labelled with its value; the legend beside the plot area, never over data. Series take twelve colours, then
-//! the same colours again with triangles instead of circles, then with crosses, so that no two of 36 look alike. PNG and SVG come from one
-//! drawing routine, so they hold the same content. Time is the time to answer at the experiment's points: the
-//! solver's set-up, its steps and one answering pass (a final gather's cost). Text uses DejaVu Sans embedded in the
-//! binary, so no system font library is needed.
+//! the same colours again with triangles instead of circles, then with crosses, so that no two of 36 look
+//! alike. PNG and SVG come from one drawing routine, so they hold the same content. Time is the time to answer
+//! at the experiment's points: the solver's set-up, its steps and one answering pass (a final gather's cost).
+//! Text uses DejaVu Sans embedded in the binary, so no system font library is needed.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
