@@ -421,7 +421,7 @@ impl ClusterGather {
                 )
             } else {
                 self.settings
-                    .visible_share(accel, face, point, key, stream, el, emits, rays)
+                    .visible_share(accel, face, point, n, key, stream, el, emits, rays)
             };
             (ff * v) * el.radiosity
         };

@@ -48,12 +48,13 @@
 //! Besides those, `irradiance_field` (`linear` by default: each link also brings its kernel's Jacobian over a
 //! cluster receiver, [`irradiance_gradient`], so a cluster's faces take the irradiance at their own
 //! centroids; `constant` for one value per cluster) and `self_exchange` ([`self_exchange`]). Point answers
-//! are Gouraud's by default, interpolating the faces' irradiance rather than their radiosity so each face keeps
-//! its own orientation ([`FaceClusterSolver`]); `reconstruction = "final-gather"` answers each point by one
-//! more gather over the tree ([`cluster_gather`]: far nodes by their power vectors, `gather_opening` 0.25 by
-//! default, near faces and emitters by exact point-to-polygon factors), the most accurate of the three at a
-//! cost per point that grows as log k; at `gather_opening = 0`, `near_field = "sub-polygons"` gathers through
-//! the shared final gather with its near field, its far light from the tree gather.
+//! are by default one more gather over the tree (`reconstruction = "final-gather"`, [`cluster_gather`]: far
+//! nodes by their power vectors, `gather_opening` 0.25 by default, near faces and emitters by exact
+//! point-to-polygon factors), the most accurate of the three at a cost per point that grows as log k; at
+//! `gather_opening = 0`, `near_field = "sub-polygons"` gathers through the shared final gather with its near
+//! field, its far light from the tree gather. `reconstruction = "gouraud"` interpolates the faces' irradiance
+//! rather than their radiosity so each face keeps its own orientation ([`FaceClusterSolver`]): no gather, but
+//! light carried across shadow edges.
 //!
 //! Measured with Gouraud answers, the linear field and the traced exchange pushed down by where it lands (the
 //! defaults, 32 trace rays a face; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,

@@ -6,7 +6,7 @@
 //! by [`VectorTransport`]. Radiosity at a point of a face comes from the deepest engine node holding the face:
 //! its patch if the refinement reached the face, else B = E + ρ max(0, n·e) with the irradiance vector e
 //! pushed to the deepest face cluster containing it (section 4's final propagation, per queried face).
-//! With `reconstruction = "gouraud"` (the default), the irradiance is interpolated instead of the radiosity:
+//! With `reconstruction = "gouraud"`, the irradiance is interpolated instead of the radiosity:
 //! at a corner of face f, every face g around that vertex offers the irradiance it gathered, I_g(n_g) with
 //! I_g(n) = n·e_g + s_g + t_g (from the deepest node holding g, e at g's centroid), carried to f's normal by the trapezoid rule between
 //! the two faces' fields; the corners' means are interpolated over f (bilinear over a quad, linear over a
@@ -19,14 +19,15 @@
 //! corners), finer than its vertices but not matched to its neighbours'. The face fields are linear in k and
 //! computed at the first query after a step.
 //!
-//! With `reconstruction = "final-gather"` a point is answered by one more gather over the face-cluster tree
-//! ([`crate::cluster_gather`]; Lischinski, Tampieri & Greenberg 1993's final gather, summed as Barnes & Hut
-//! 1986 sum forces): nodes smaller than `gather_opening` times their distance by their power vectors, nearer
-//! ones opened down to the faces' exact point-to-polygon factors with visibility rays, emitters always
-//! exactly. It reads every face's constant answer (a pass linear in k after each step) and costs about log k
-//! kernel evaluations and rays a point, charged to answering. It is the most accurate of the three answers,
-//! but not the default: `radlab solve` answers at 16 points a face for its face table and at every corner of
-//! its mesh, tens of millions of gathers at 10⁶ faces, where Gouraud answers cost seconds. With
+//! With `reconstruction = "final-gather"` (the default) a point is answered by one more gather over the
+//! face-cluster tree ([`crate::cluster_gather`]; Lischinski, Tampieri & Greenberg 1993's final gather, summed as
+//! Barnes & Hut 1986 sum forces): nodes smaller than `gather_opening` times their distance by their power
+//! vectors, nearer ones opened down to the faces' exact point-to-polygon factors with visibility rays, emitters
+//! always exactly. It reads every face's constant answer (a pass linear in k after each step) and costs about log k
+//! kernel evaluations and rays a point, charged to answering. It is the most accurate of the three answers
+//! and the default, chosen by the worst scenes of the defaults suite, where Gouraud answers smear light across
+//! shadow edges. Its cost shows in `radlab solve`, which answers 16 points a face for its face table and every
+//! corner of its mesh: millions of gathers at 10⁶ faces, where Gouraud answers cost seconds. With
 //! `gather_values = "gathered"` the values it reads are themselves gathered first, at every face's centroid
 //! (a second bounce: [`crate::cluster_gather`]), for k more gathers a solution, also charged to answering.
 //! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-answer's shared final
@@ -140,12 +141,11 @@ impl Default for FaceClusterSolveParams {
             engine: HierarchicalParams {
                 error_norm: ErrorNorm::Power,
                 epsilon: DEFAULT_EPSILON,
-                // The irradiance interpolated from the vertices and taken by each face's normal: closer to
-                // the path-traced reference than the leaves' own values on the terrain, the bumpy sphere and
-                // concentric spheres at every ε measured (the module docs give the figures). A final gather
-                // is closer still, but costs a gather per query: the module docs say why it is not the
-                // default.
-                reconstruction: Reconstruction::Gouraud,
+                // One more gather over the tree: chosen by the worst scene of the defaults suite (Gouraud
+                // answers smear light across shadow edges: 21% mean in the furnished room, 37% on a polygon
+                // soup, 16–21% on scanned meshes in rooms; docs/defaults.md gives the figures). Gouraud
+                // costs no gather and stays a setting.
+                reconstruction: Reconstruction::FinalGather,
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),

@@ -347,7 +347,7 @@ fn an_opening_outside_zero_to_one_or_without_a_final_gather_is_refused() {
             "{bad}: {err}"
         );
     }
-    let err = refused(&[("gather_opening", "0.1")]);
+    let err = refused(&[("reconstruction", "gouraud"), ("gather_opening", "0.1")]);
     assert!(
         err.contains("gather_opening") && err.contains("gouraud") && err.contains("final-gather"),
         "{err}"
@@ -368,7 +368,10 @@ fn gathered_values_parameters_are_checked() {
         err.contains("gather_values") && err.contains("solution or gathered"),
         "{err}"
     );
-    let err = refused(&[("gather_values", "\"gathered\"")]);
+    let err = refused(&[
+        ("reconstruction", "gouraud"),
+        ("gather_values", "\"gathered\""),
+    ]);
     assert!(
         err.contains("gather_values") && err.contains("final-gather"),
         "{err}"
@@ -463,7 +466,7 @@ fn near_field_parameters_are_checked() {
         err.contains("near_field") && err.contains("off or sub-polygons"),
         "{err}"
     );
-    let err = refused(&[sub]);
+    let err = refused(&[("reconstruction", "gouraud"), sub]);
     assert!(
         err.contains("near_field") && err.contains("final-gather"),
         "{err}"

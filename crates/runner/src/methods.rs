@@ -143,9 +143,10 @@ pub fn methods() -> Vec<MethodInfo> {
             "wavelet",
             "Wavelet radiosity (Gortler, Schroder, Cohen & Hanrahan 1993): hierarchical radiosity with M^2 \
              coefficients per element (basis = haar | f2 | f3 | m2 | m3) and M^4 per link by Gauss quadrature, \
-             visibility per pair of quadrature nodes or per link, Bekaert & Willems's oracle; answers from the \
-             basis itself, smoothed, or by a final gather. linkless = true shoots unshot radiosity without storing \
-             links (Stamminger et al. 1998), with an optional bounded link cache (link_cache_mib).",
+             visibility per pair of quadrature nodes or per link, Bekaert & Willems's oracle; answers by a final \
+             gather by default, from the basis itself, or smoothed. linkless = true shoots unshot radiosity \
+             without storing links (Stamminger et al. 1998), with an optional bounded link cache \
+             (link_cache_mib).",
             radlab_wavelet::WaveletParams,
             radlab_wavelet::WaveletSolver,
             // M2 with the F oracle at ε = 0.02, leaves no smaller than a quarter of an input face, the
@@ -187,8 +188,8 @@ pub fn methods() -> Vec<MethodInfo> {
             summary: "Face cluster radiosity (Willmott, Heckbert & Garland 1999): face-cluster hierarchies from \
                  dual-graph contraction (cached per mesh digest in cache_dir), irradiance and power vectors per \
                  node, a volume octree above the hierarchies' roots, one self-link refined by the hierarchical \
-                 oracles; gather, push and pull never read an input face; answers Gouraud-interpolated by default, \
-                 or a final gather over the tree (reconstruction = final-gather). For detailed meshes.",
+                 oracles; gather, push and pull never read an input face; answers by a final gather over the tree \
+                 by default, or Gouraud-interpolated (reconstruction = gouraud). For detailed meshes.",
             params: param_lines::<radlab_face_cluster::FaceClusterSolveParams>,
             build: |scene, accel, table, seed, _points| {
                 crate::face_cache::build_solver(scene, accel, table, seed)
@@ -196,7 +197,7 @@ pub fn methods() -> Vec<MethodInfo> {
             validate: |table| {
                 radlab_face_cluster::FaceClusterSolveParams::from_table(table).map(|_| ())
             },
-            // Defaults (ε = 1e-4, Gouraud answers). Deterministic; like volume clusters, its cluster links'
+            // Defaults (ε = 1e-4, final-gather answers). Deterministic; like volume clusters, its cluster links'
             // row sums are not exact, so the generic 1% balance applies.
             test: TestSettings {
                 params: |_| toml::Table::new(),

@@ -80,17 +80,6 @@ struct Exception {
 
 const EXCEPTIONS: &[Exception] = &[
     Exception {
-        method: "face-cluster",
-        case: "sliver (aspect 1e4) in a furnace",
-        expect: Expect::Misses,
-        overrides: &[],
-        // Measured 7.4e-2 (debug, 2026-11-30, evening); 5.4e-1 before near faces were gathered per leaf.
-        reason: "the sliver, a root of its own with 1e-4 of the scene's area, keeps its links from two volume \
-                 clusters of three wall quads each, whose isotropic transfer (projected area A/4) misjudges open \
-                 groups of flat faces; the power norm keeps them because the sliver is small: its row of the \
-                 operator sums to 0.918 instead of 1",
-    },
-    Exception {
         method: "mc-radiosity",
         case: "furnace cube ρ=0.999",
         expect: Expect::Finite,

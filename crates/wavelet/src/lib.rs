@@ -21,7 +21,7 @@
 //! | `quadrature` | per basis | Gauss points per side (per sub-square for flatlets): haar 2, f2/f3 1, m2 3, m3 4 |
 //! | `min_element_size` | diagonal/150 | no element is split into children shorter than this |
 //! | `schedule` | `scheduled` | as for hierarchical radiosity |
-//! | `reconstruction` | `basis` | `basis` (the leaf's functions), `smoothed` (vertex-averaged means), `final-gather` |
+//! | `reconstruction` | `final-gather` | `final-gather` (one more gather), `basis` (the leaf's functions), `smoothed` (vertex-averaged means) |
 //! | `tolerance`, `max_steps`, `memory_budget_mib` | 1e-4, 100000, 4096 | as for hierarchical radiosity |
 //! | `linkless` | false | shoot unshot radiosity without storing links (Stamminger, Schirmacher, Slusallek & Seidel 1998; the engine's `set_linkless`); `schedule` is then not used |
 //! | `link_cache_mib` | 0 | linkless only: a least-recently-used cache of computed links (tensors and leaf coefficients) of at most this many MiB; 0 = none; results bit-identical with and without |

@@ -6,7 +6,10 @@ use radlab_method::{Solver, Step};
 use radlab_scene::{Scene, SceneBuilder};
 use radlab_testkit::{add_box, material};
 use radlab_visibility::Accel;
-use radlab_wavelet::{Basis, Engines, WaveletGather, WaveletOracle, WaveletParams, WaveletSolver};
+use radlab_wavelet::{
+    Basis, Engines, WaveletGather, WaveletOracle, WaveletParams, WaveletReconstruction,
+    WaveletSolver,
+};
 
 const RHO: f64 = 0.999;
 
@@ -83,6 +86,7 @@ fn the_furnace_holds_in_every_basis() {
             oracle: WaveletOracle::F,
             min_element_size: Some(0.5),
             tolerance: 1e-9,
+            reconstruction: WaveletReconstruction::Basis,
             ..WaveletParams::default()
         };
         let s = solve(&scene, &accel, params);

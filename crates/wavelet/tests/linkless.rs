@@ -7,7 +7,9 @@ use radlab_method::{Solution, Solver, Stats, Step};
 use radlab_scene::{Rgb, Scene, SceneBuilder};
 use radlab_testkit::{add_box, material, room};
 use radlab_visibility::Accel;
-use radlab_wavelet::{Basis, Engines, WaveletOracle, WaveletParams, WaveletSolver};
+use radlab_wavelet::{
+    Basis, Engines, WaveletOracle, WaveletParams, WaveletReconstruction, WaveletSolver,
+};
 
 fn solve<'a>(scene: &'a Scene, accel: &'a Accel, params: WaveletParams) -> WaveletSolver<'a> {
     let mut s = WaveletSolver::new(scene, accel, params, 7).expect("solver");
@@ -174,6 +176,7 @@ fn linkless_matches_linked_and_balances_power() {
             basis,
             epsilon: 0.02,
             min_element_size: Some(0.05),
+            reconstruction: WaveletReconstruction::Basis,
             ..WaveletParams::default()
         };
         let linked = solve(&scene, &accel, params.clone());
@@ -216,6 +219,7 @@ fn the_link_cache_changes_no_number() {
         epsilon: 0.02,
         min_element_size: Some(0.05),
         linkless: true,
+        reconstruction: WaveletReconstruction::Basis,
         ..WaveletParams::default()
     };
     let plain = solve(&scene, &accel, params.clone());
@@ -258,6 +262,7 @@ fn shooting_does_not_depend_on_the_thread_count() {
         min_element_size: Some(0.05),
         linkless: true,
         link_cache_mib: 1.0,
+        reconstruction: WaveletReconstruction::Basis,
         ..WaveletParams::default()
     };
     let run = |threads: usize| {

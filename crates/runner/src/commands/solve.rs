@@ -163,14 +163,19 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     });
     let solved = solve(&loaded, a, &[])?;
     let solution = solved.solution();
-    let means = faces_csv::face_means(scene, solution);
+    // Answering every face and every mesh corner is long work where answers are final gathers.
+    let bar = progress::bar(0, "faces.csv");
+    let means = faces_csv::face_means(scene, solution, &bar);
+    bar.finish_and_clear();
     faces_csv::write_faces_csv(&out.join("faces.csv"), scene, &means)?;
     let piece = if scene.faces.len() < 100_000 {
         0.5 * radlab_answer::default_element_size(scene)
     } else {
         f64::INFINITY
     };
-    ply_radiosity::write_ply(&out.join("radiosity.ply"), scene, solution, piece)?;
+    let bar = progress::bar(0, "radiosity.ply");
+    ply_radiosity::write_ply(&out.join("radiosity.ply"), scene, solution, piece, &bar)?;
+    bar.finish_and_clear();
     let mut written = vec!["faces.csv", "radiosity.ply"];
     if let Some(camera) = &scene.camera {
         let image = render_image(&loaded, camera, solution, args.spp, a.seed);

@@ -5,14 +5,16 @@
 use std::path::Path;
 
 use anyhow::Result;
+use indicatif::ProgressBar;
 use radlab_method::Solution;
 use radlab_scene::{Rgb, Scene};
 use rayon::prelude::*;
 
 use super::atomic::write_bytes;
 
-/// Area-mean radiosity of every face (4 × 4 midpoint samples).
-pub fn face_means(scene: &Scene, solution: &dyn Solution) -> Vec<Rgb> {
+/// Area-mean radiosity of every face (4 × 4 midpoint samples), counting the faces answered on `bar`.
+pub fn face_means(scene: &Scene, solution: &dyn Solution, bar: &ProgressBar) -> Vec<Rgb> {
+    bar.set_length(scene.faces.len() as u64);
     (0..scene.faces.len())
         .into_par_iter()
         .map(|f| {
@@ -26,6 +28,7 @@ pub fn face_means(scene: &Scene, solution: &dyn Solution) -> Vec<Rgb> {
                     );
                 }
             }
+            bar.inc(1);
             s / 16.0
         })
         .collect()

@@ -8,6 +8,7 @@
 use std::path::Path;
 
 use anyhow::Result;
+use indicatif::ProgressBar;
 use radlab_method::Solution;
 use radlab_scene::{Polygon, Rgb, Scene};
 use rayon::prelude::*;
@@ -25,12 +26,14 @@ pub fn srgb_byte(v: f64) -> u8 {
     (s * 255.0 + 0.5) as u8
 }
 
-/// Writes the solution over the scene's faces, subdivided to `piece_size` (∞ for whole faces).
+/// Writes the solution over the scene's faces, subdivided to `piece_size` (∞ for whole faces), counting the
+/// pieces answered on `bar`.
 pub fn write_ply(
     path: &Path,
     scene: &Scene,
     solution: &dyn Solution,
     piece_size: f64,
+    bar: &ProgressBar,
 ) -> Result<()> {
     let pieces: Vec<(usize, Polygon)> = (0..scene.faces.len())
         .into_par_iter()
@@ -42,14 +45,18 @@ pub fn write_ply(
                 .map(move |p| (f, p))
         })
         .collect();
+    bar.set_length(pieces.len() as u64);
     let verts: Vec<Vec<(glam::DVec3, Rgb)>> = pieces
         .par_iter()
         .map(|(f, p)| {
             let c = p.centroid();
-            p.vertices()
+            let answers = p
+                .vertices()
                 .iter()
                 .map(|&v| (v, solution.radiosity_at(*f, v + (c - v) * 1e-6)))
-                .collect()
+                .collect();
+            bar.inc(1);
+            answers
         })
         .collect();
     let peak = pieces
