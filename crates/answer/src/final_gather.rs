@@ -17,12 +17,12 @@
 //! radiosity is that of its open part only ([`ElementValue::open`] < 1, [`radlab_kernels::open_fraction`]) gets the
 //! `direct` rays too: its visible share must be measured over its area, since one ray to its centroid would
 //! count it whole or not at all. The share is that of the points in front of the query's plane, the part of
-//! the source F_{x→j} integrates over: the ray test ignores the query's own face, so a ray to a point behind it
-//! would leave through that face (into the solid the face bounds, or out of a closed box standing on a floor,
-//! where it gathered light into the box). The random points of a
-//! query come from a stream derived from the seed and the query point's coordinates, so an answer depends only
-//! on (solution, point, seed), never on the order or thread of the queries. Sources on the query's own face
-//! (planar, so it cannot see them) and sources with B_j = 0 are skipped.
+//! the source F_{x→j} integrates over: the ray test ignores the query's own face, so a ray to a point behind
+//! it would leave through that face (into the solid the face bounds, or out of a closed box standing on a
+//! floor, where it gathered light into the box). The random points of a query come from a stream derived
+//! from the seed and the query point's coordinates, so an answer depends only on (solution, point, seed),
+//! never on the order or thread of the queries. Sources on the query's own face (planar, so it cannot see
+//! them) and sources with B_j = 0 are skipped.
 //!
 //! Near field: a constant B_j is its element's mean, but a query point close to a source element, relative to
 //! the element's size, sees mostly the part of it nearest the point: a point millimetres from a room's corner

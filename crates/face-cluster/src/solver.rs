@@ -20,14 +20,15 @@
 //! computed at the first query after a step.
 //!
 //! With `reconstruction = "final-gather"` (the default) a point is answered by one more gather over the
-//! face-cluster tree ([`crate::cluster_gather`]; Lischinski, Tampieri & Greenberg 1993's final gather, summed as
-//! Barnes & Hut 1986 sum forces): nodes smaller than `gather_opening` times their distance by their power
-//! vectors, nearer ones opened down to the faces' exact point-to-polygon factors with visibility rays, emitters
-//! always exactly. It reads every face's constant answer (a pass linear in k after each step) and costs about log k
-//! kernel evaluations and rays a point, charged to answering. It is the most accurate of the three answers
-//! and the default, chosen by the worst scenes of the defaults suite, where Gouraud answers smear light across
-//! shadow edges. Its cost shows in `radlab solve`, which answers 16 points a face for its face table and every
-//! corner of its mesh: millions of gathers at 10⁶ faces, where Gouraud answers cost seconds. With
+//! face-cluster tree ([`crate::cluster_gather`]; Lischinski, Tampieri & Greenberg 1993's final gather,
+//! summed as Barnes & Hut 1986 sum forces): nodes smaller than `gather_opening` times their distance by their
+//! power vectors, nearer ones opened down to the faces' exact point-to-polygon factors with visibility rays,
+//! emitters always exactly. It reads every face's constant answer (a pass linear in k after each step) and
+//! costs about log k kernel evaluations and rays a point, charged to answering. It is the most accurate of
+//! the three answers and the default, chosen by the worst scenes of the defaults suite, where Gouraud answers
+//! smear light across shadow edges. Its cost shows in `radlab solve`, which answers 16 points a face for its
+//! face table and every corner of its mesh: millions of gathers at 10⁶ faces, where Gouraud answers cost
+//! seconds. With
 //! `gather_values = "gathered"` the values it reads are themselves gathered first, at every face's centroid
 //! (a second bounce: [`crate::cluster_gather`]), for k more gathers a solution, also charged to answering.
 //! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-answer's shared final
@@ -141,10 +142,10 @@ impl Default for FaceClusterSolveParams {
             engine: HierarchicalParams {
                 error_norm: ErrorNorm::Power,
                 epsilon: DEFAULT_EPSILON,
-                // One more gather over the tree: chosen by the worst scene of the defaults suite (Gouraud
+                // One more gather over the tree: chosen by the worst scenes of the defaults suite (Gouraud
                 // answers smear light across shadow edges: 21% mean in the furnished room, 37% on a polygon
-                // soup, 16–21% on scanned meshes in rooms; docs/defaults.md gives the figures). Gouraud
-                // costs no gather and stays a setting.
+                // soup, 5% with a 140% worst point on the scanned dragon in its room; docs/defaults.md gives
+                // the figures). Gouraud costs no gather and stays a setting.
                 reconstruction: Reconstruction::FinalGather,
                 ..HierarchicalParams::default()
             },
