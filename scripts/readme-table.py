@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Prints the README's quickstart table from results/headline/quickstart/runs.csv (time = steps + one answering
-pass at the evaluation points; rays likewise), so the table is regenerated, not transcribed."""
+"""Prints the README's quickstart table from results/headline/quickstart/runs.csv (time = set-up + steps + one
+answering pass at the evaluation points; rays = steps' + answering's), so the table is regenerated, not
+transcribed."""
 import csv
 import sys
 
