@@ -57,7 +57,7 @@
 //! light carried across shadow edges.
 //!
 //! Measured with Gouraud answers, the linear field and the traced exchange pushed down by where it lands (the
-//! defaults, 32 trace rays a face; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,
+//! defaults then, 32 trace rays a face; release, `radlab run` with 1,024 points against 4,096-path references, idle machine,
 //! 2026-12-01): direct light on a flat 10⁴-face floor at ε = 1e-4 / 1e-5 / 1e-6, 1.9 / 0.7 / 0.6% (one
 //! irradiance per cluster: 11.0 / 4.0 / 1.8%; noise floor 0.53%); terrain 10⁴ faces 1.76 / 1.61 / 1.51%
 //! (before these changes, constant answers: 4.4 / 3.1 / 2.4%; with 4 trace rays a face and one landing ratio
