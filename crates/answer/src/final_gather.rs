@@ -591,7 +591,7 @@ impl FinalGather {
                     let k = ((sampling::uniform(&mut r) * 4.0) as usize).min(3);
                     let front = |&(y, _): &(DVec3, Rgb)| n.dot(y - point) > 0.0;
                     let ahead = points.iter().filter(|p| front(p)).count();
-                    let (y, b) = if ahead == 0 || ahead == 4 {
+                    let (y, b) = if ahead == 0 {
                         points[k]
                     } else {
                         *points

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use super::config::{Evaluation, LimitsConfig, OutputsConfig, ReferenceKind, RunSpec};
 use super::metrics::{self, Errors};
 use super::reference;
-use crate::output::atomic::write_bytes;
+use crate::output::atomic::{write_bytes, write_csv_rows};
 use crate::output::exr_image::write_exr;
 use crate::solve_loop::{self, Limits};
 
@@ -582,14 +582,7 @@ struct RunFiles<'a> {
 impl RunFiles<'_> {
     /// Writes the trace so far and the answers `values` at the points beside the reference (each atomically).
     fn write(&self, trace: &[TraceRow], values: &[Rgb]) -> Result<()> {
-        write_bytes(&trace_path(self.dir, self.id), |w| {
-            let mut out = csv::Writer::from_writer(w);
-            for t in trace {
-                out.serialize(t)?;
-            }
-            out.flush()?;
-            Ok(())
-        })?;
+        write_csv_rows(&trace_path(self.dir, self.id), trace)?;
         write_points(
             &points_path(self.dir, self.id),
             self.points,

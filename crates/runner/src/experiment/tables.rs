@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 
 use super::execute::{RunResult, TraceRow, read_result};
-use crate::output::atomic::write_bytes;
+use crate::output::atomic::write_csv_rows;
 
 /// Every completed run's result in `dir/runs`, by expansion index.
 pub fn collect_results(dir: &Path) -> Result<Vec<RunResult>> {
@@ -34,14 +34,7 @@ pub fn collect_results(dir: &Path) -> Result<Vec<RunResult>> {
 
 /// Writes `runs.csv` and `trace.csv` from the per-run files.
 pub fn write_tables(dir: &Path, results: &[RunResult]) -> Result<()> {
-    write_bytes(&dir.join("runs.csv"), |w| {
-        let mut out = csv::Writer::from_writer(w);
-        for r in results {
-            out.serialize(r)?;
-        }
-        out.flush()?;
-        Ok(())
-    })?;
+    write_csv_rows(&dir.join("runs.csv"), results)?;
     let mut rows = Vec::new();
     for r in results {
         let p = super::execute::trace_path(dir, &r.id);
@@ -53,14 +46,7 @@ pub fn write_tables(dir: &Path, results: &[RunResult]) -> Result<()> {
             }));
         }
     }
-    write_bytes(&dir.join("trace.csv"), |w| {
-        let mut out = csv::Writer::from_writer(w);
-        for t in &rows {
-            out.serialize(t)?;
-        }
-        out.flush()?;
-        Ok(())
-    })
+    write_csv_rows(&dir.join("trace.csv"), &rows)
 }
 
 /// Reads a trace CSV.

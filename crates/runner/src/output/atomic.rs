@@ -66,6 +66,18 @@ pub fn write_bytes(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>)
     })
 }
 
+/// Writes `rows` as CSV (a header from the first row's fields) atomically.
+pub fn write_csv_rows<T: serde::Serialize>(path: &Path, rows: &[T]) -> Result<()> {
+    write_bytes(path, |w| {
+        let mut out = csv::Writer::from_writer(w);
+        for r in rows {
+            out.serialize(r)?;
+        }
+        out.flush()?;
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
