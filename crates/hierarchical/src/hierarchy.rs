@@ -121,8 +121,8 @@ pub(crate) struct SolveState<I, X> {
     /// Per receiver, per link (aligned with its links): 1/ō_l, ō_l the open share of the link's receiver as
     /// the link's own coefficients weight it (the crate's `open_share` module), 0 where the receiver is sealed.
     pub(crate) link_gain: Vec<Vec<f64>>,
-    /// Per node, the factor a leaf's gathered irradiance is capped by, min(1, 1/R'), R' its row sum with
-    /// the gains (1 above the leaves).
+    /// Per node, the factor a partly sealed leaf's gathered irradiance is capped by, min(1, 1/R'), R' its row
+    /// sum with the gains (1 at wholly open leaves and above the leaves).
     pub(crate) row_cap: Vec<f64>,
     pub(crate) coarse_mu: Option<(Vec<Rgb>, Vec<X>)>,
     /// Whether leaf irradiance is rescaled so that every row sums to one (a closed scene).

@@ -775,3 +775,36 @@ fn a_floor_gathers_the_side_of_a_cube_whose_plane_its_samples_miss() {
     }
     assert!(checked >= 2, "{checked} floor leaves in front of the side");
 }
+
+/// An occluded furnace: the Cornell box closed by a front wall, every surface at ρ = 0.5 and E = 1, has
+/// B = E/(1 − ρ) = 2 at every point light reaches, blocks or not, so the open leaves' mean radiosity (weights
+/// o A) must be 2. Each leaf's row sum Σ_l c_{t,l}/ō_l estimates its exact row, 1: a coarse link's visibility
+/// is one fraction for the whole receiver, so leaves that see its source more than the receiver as a whole
+/// get rows above 1 and those that see it less get rows below, by a few per cent, the link's power
+/// unchanged. Capping every row at 1 (as straddling leaves' rows must be, where the open-share estimate and
+/// the visibility rays disagree) kept the deficits and dropped the excesses: the leaves' mean fell 1.3% short
+/// of 2 here, the bias of the hierarchical methods on the Cornell box. What remains is the ratio estimators'
+/// bias and the cap of the straddling leaves, well inside the issue's ±0.3% target.
+#[test]
+fn an_occluded_furnace_keeps_its_light() {
+    let scene = radlab_testkit::cornell_furnace(0.5, 1.0);
+    let accel = Accel::new(&scene);
+    let s = solve(&scene, &accel, leaf_params());
+    let e = s.engine();
+    let (mut sum, mut weight) = (0.0, 0.0);
+    for i in 0..e.nodes().len() as u32 {
+        let o = e.open_shares()[i as usize];
+        if e.is_leaf(i) && o > 0.0 {
+            let w = o * e.nodes()[i as usize].area;
+            sum += w * e.radiosity()[i as usize].element_sum() / 3.0;
+            weight += w;
+        }
+    }
+    let bias = sum / weight / 2.0 - 1.0;
+    assert!(
+        bias.abs() <= 3e-3,
+        "open leaves' mean radiosity {:.5} against 2: bias {:+.3}%",
+        sum / weight,
+        100.0 * bias
+    );
+}

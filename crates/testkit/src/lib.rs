@@ -2,7 +2,7 @@
 //!
 //! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
 //! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
-//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, a block standing on the floor ([`sealed`]), and a scene
+//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, the Cornell box closed into a furnace ([`cornell_furnace`]), a block standing on the floor ([`sealed`]), and a scene
 //! scaled by a factor (results must not depend on it); and the comparison of several seeds' mean answer with a
 //! reference's ([`ChannelMeans`]). Test support, kept in one place so no crate carries its own copy; nothing in
 //! the solvers uses it.
@@ -105,6 +105,30 @@ pub fn furnace_with_cube(rho: f64, e: f64, lift: f64) -> Scene {
         m,
         true,
     );
+    b.build().expect("scene")
+}
+
+/// The published Cornell box (radlab-scene's `builtin:cornell`, millimetres) closed by a front wall over its
+/// open side, every face of reflectance `rho` and emission `e`: the two blocks stand on the floor, occluding
+/// and sealing it, and every point light can reach has B = E/(1 − ρ) (the floor under the blocks, which sees
+/// only their insides, receives nothing). The front wall's corners are where the published floor and ceiling
+/// end at z = 0. Faces: the builtin's, in its order, then the front wall.
+pub fn cornell_furnace(rho: f64, e: f64) -> Scene {
+    let cornell = radlab_scene::builtin("cornell").expect("builtin Cornell box");
+    let mut b = SceneBuilder::new("closed Cornell furnace");
+    let m = material(&mut b, "furnace", rho, e);
+    for f in 0..cornell.face_count() {
+        b.add_polygon_points(cornell.polygon(f).vertices(), m, "cornell")
+            .expect("face");
+    }
+    let front = [
+        dvec3(0.0, 0.0, 0.0),
+        dvec3(552.8, 0.0, 0.0),
+        dvec3(556.0, 548.8, 0.0),
+        dvec3(0.0, 548.8, 0.0),
+    ];
+    b.add_polygon_points(&front, m, "front wall")
+        .expect("front wall");
     b.build().expect("scene")
 }
 
