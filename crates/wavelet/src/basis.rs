@@ -90,11 +90,14 @@ impl Basis {
     }
 
     /// Gauss points per cell and side by default: M + 1 for multiwavelets (a rule of degree 2M + 1, as
-    /// Bekaert & Willems 1996 ask for error estimates), 2 for Haar, 1 per sub-square for flatlets.
+    /// Bekaert & Willems 1996 ask for error estimates), 2 for Haar and 2 per sub-square for flatlets: one more
+    /// per side than the functions on a cell. With one point per sub-square a flatlet link reproduces the
+    /// kernel at the receiver's nodes exactly by construction (M² nodes, M² functions), so Bekaert &
+    /// Willems's residual is identically zero and no link was ever refined (a long tube lit at one end: F2
+    /// 77% relative L1 with 6 elements; 4.2% with two points).
     pub fn default_points(self) -> usize {
         match self {
-            Basis::Haar => 2,
-            Basis::F2 | Basis::F3 => 1,
+            Basis::Haar | Basis::F2 | Basis::F3 => 2,
             Basis::M2 => 3,
             Basis::M3 => 4,
         }

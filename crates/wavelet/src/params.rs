@@ -54,7 +54,7 @@ pub struct WaveletParams {
     /// relation; M^4 per link only).
     pub gather: WaveletGather,
     /// Gauss points per side of each element's quadrature (per sub-square for flatlets); unset: the basis'
-    /// default (haar 2, f2/f3 1 per sub-square, m2 3, m3 4). At least M for multiwavelets.
+    /// default (haar 2, f2/f3 2 per sub-square, m2 3, m3 4). At least M for multiwavelets.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 1, max = 8))]
     pub quadrature: Option<u32>,
@@ -218,7 +218,7 @@ mod tests {
         .expect("valid");
         assert_eq!(p.basis, Basis::F3);
         assert_eq!(p.visibility, Visibility::PerLink);
-        assert_eq!(p.points(), 1);
+        assert_eq!(p.points(), 2);
         let e = WaveletParams::from_pairs(&[("link_cache_mib".to_string(), "8".to_string())])
             .expect_err("a cache without linkless")
             .to_string();
