@@ -257,3 +257,39 @@ fn per_pair_visibility_resolves_a_shadow_inside_a_link() {
     assert!(per_link.visibility > 0.05 && per_link.visibility < 0.95);
     assert!(pair.visibility > 0.05 && pair.visibility < 0.95);
 }
+
+/// Bekaert & Willems's estimate must see a link's error in every basis at its default rule: the residual of the
+/// mean column at the receiver's nodes measures how far the link's reproduction is from the exact kernel
+/// there, so it must be of the order of the reproduction error itself. With one node per sub-square (the
+/// flatlets' former default) the M² functions interpolate the M² nodes, the residual was exactly 0 whatever
+/// the error, and no flatlet link was ever refined. A unit square receiving from a unit square standing on its
+/// edge at x = 0 (Howell's C-14), where the irradiance falls from 0.5 at the shared edge to 0.04 at the far one
+/// (two parallel squares would not do: by symmetry the kernel is the same at every node of a 2 × 2 rule).
+#[test]
+fn the_oracle_s_residual_sees_the_reproduction_error_in_every_basis() {
+    fn check<const K: usize>(scene: &Scene, accel: &Accel, basis: Basis) {
+        let l = link::<K>(scene, accel, basis, basis.default_points(), 0, 1);
+        let err = reproduction_error::<K>(scene, basis, &l);
+        let residual = l.residual[0] as f64 / l.f_recv as f64;
+        assert!(
+            residual >= 0.1 * err,
+            "{basis:?}: residual {residual:.3e} of F against a reproduction error of {err:.3e}"
+        );
+    }
+    let scene = {
+        let mut b = SceneBuilder::new("perpendicular");
+        let m = material(&mut b, "m", 0.5, 1.0);
+        let (o, x, y, z) = (DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z);
+        b.add_polygon_points(&[o, o + x, o + x + y, o + y], m, "floor")
+            .expect("quad");
+        b.add_polygon_points(&[o, o + y, o + y + z, o + z], m, "wall")
+            .expect("quad");
+        b.build().expect("scene")
+    };
+    let accel = Accel::new(&scene);
+    check::<1>(&scene, &accel, Basis::Haar);
+    check::<4>(&scene, &accel, Basis::F2);
+    check::<9>(&scene, &accel, Basis::F3);
+    check::<4>(&scene, &accel, Basis::M2);
+    check::<9>(&scene, &accel, Basis::M3);
+}
