@@ -263,7 +263,7 @@ fn per_pair_visibility_resolves_a_shadow_inside_a_link() {
 /// there, so it must be of the order of the reproduction error itself. With one node per sub-square (the
 /// flatlets' former default) the M² functions interpolate the M² nodes, the residual was exactly 0 whatever
 /// the error, and no flatlet link was ever refined. A unit square receiving from a unit square standing on its
-/// edge at x = 0 (Howell's C-14), where the irradiance falls from 0.5 at the shared edge to 0.04 at the far one
+/// edge at x = 0 (Howell's C-14), where the factor to the wall falls from 0.5 at the shared edge's middle to 0.07 at the far edge's
 /// (two parallel squares would not do: by symmetry the kernel is the same at every node of a 2 × 2 rule).
 #[test]
 fn the_oracle_s_residual_sees_the_reproduction_error_in_every_basis() {
