@@ -3,9 +3,10 @@
 
 Issue 45's targets are stricter on floors and walls (3% mean, 10% max) than on the rest of a scene. A room's shell
 is taken as the evaluation points lying on the bounding box of all of a run's evaluation points (within 1e-3 of
-its diagonal): the room's six sides, whatever stands in it. The error per point is the reports' max error,
-|B - R| / max(|R|, 2% of the scene's mean R) in the worst channel. Prints a markdown table of mean / max error
-over the shell (and the number of shell points) per scene and method, for every finished or killed run.
+its diagonal): the room's six sides, whatever stands in it. The error per point is the run's own `rel_error`
+column (the reports' max error: |B - R| / max(|R|, 2% of the scene's mean R) in the worst channel). Prints a
+markdown table of mean / max error over the shell (and the number of shell points) per scene and method, for
+every finished or killed run.
 
     python3 scripts/shell-errors.py results/defaults-suite [more result directories ...]
 """
@@ -22,14 +23,11 @@ def shell_errors(points_csv):
     lo = [min(p[i] for p in pos) for i in range(3)]
     hi = [max(p[i] for p in pos) for i in range(3)]
     tol = 1e-3 * sum((hi[i] - lo[i]) ** 2 for i in range(3)) ** 0.5
-    ref = [[float(x["ref_" + c]) for c in "rgb"] for x in rows]
-    val = [[float(x[c]) for c in "rgb"] for x in rows]
-    floor = 0.02 * sum(sum(abs(v) for v in r) for r in ref) / (3 * len(ref))
-    errors = []
-    for p, b, r in zip(pos, val, ref):
-        if any(abs(p[i] - lo[i]) < tol or abs(p[i] - hi[i]) < tol for i in range(3)):
-            errors.append(max(abs(x - y) / max(abs(y), floor) for x, y in zip(b, r)))
-    return errors
+    return [
+        float(x["rel_error"])
+        for p, x in zip(pos, rows)
+        if any(abs(p[i] - lo[i]) < tol or abs(p[i] - hi[i]) < tol for i in range(3))
+    ]
 
 
 def main(dirs):

@@ -589,17 +589,12 @@ impl FinalGather {
                     // One of the four points at random, of those in front of the query's plane if any (a
                     // ray to a point behind it would leave through the query's own face).
                     let k = ((sampling::uniform(&mut r) * 4.0) as usize).min(3);
-                    let front = |&(y, _): &(DVec3, Rgb)| n.dot(y - point) > 0.0;
-                    let ahead = points.iter().filter(|p| front(p)).count();
-                    let (y, b) = if ahead == 0 {
-                        points[k]
-                    } else {
-                        *points
-                            .iter()
-                            .filter(|p| front(p))
-                            .nth(k % ahead)
-                            .expect("k % ahead < ahead")
-                    };
+                    let (mut ahead, mut m) = (*points, 0);
+                    for &p in points.iter().filter(|&&(y, _)| n.dot(y - point) > 0.0) {
+                        ahead[m] = p;
+                        m += 1;
+                    }
+                    let (y, b) = if m == 0 { points[k] } else { ahead[k % m] };
                     if accel.visible_between(point, face, y, src.face) {
                         sum += fk * b;
                     }
