@@ -68,7 +68,7 @@ use serde::{Deserialize, Serialize};
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::cluster_gather::{
     ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues, NearField, TreeFarField,
-    area_mean,
+    open_area_mean,
 };
 use crate::face_node::{FaceContext, FaceNode};
 use crate::irradiance_gradient::IrradianceField;
@@ -336,7 +336,8 @@ impl<'a> FaceClusterSolver<'a> {
             ctx.exchange = SelfExchange::trace(&ctx.tree, scene, accel, seed, params.self_rays);
         }
         let ctx = Arc::new(ctx);
-        let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
+        let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather)
+            .with_open_shares(scene);
         let transport = VectorTransport::new(
             patches,
             accel,
@@ -624,7 +625,7 @@ impl<'a> FaceClusterSolver<'a> {
             let values: Vec<Rgb> = (0..k)
                 .into_par_iter()
                 .map(|f| match patches.get(&f) {
-                    Some(leaves) => area_mean(leaves),
+                    Some(leaves) => open_area_mean(leaves),
                     None => self.constant_at(f, self.scene.faces[f].centroid),
                 })
                 .collect();

@@ -711,6 +711,10 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         Some(self.patches.source_weight(leaf.patch()?, recv.patch()?))
     }
 
+    fn open_share(&self, leaf: &FaceNode<'a>) -> Option<f64> {
+        Transport::<Patch>::open_share(&self.patches, leaf.patch()?)
+    }
+
     fn deliver(&self, h: &mut ClampedIrradiance, c: &LinkCoefficient, flux: Rgb) {
         for k in 0..3 {
             h.vector[k] += c.vector * flux[k];

@@ -337,6 +337,21 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
         &self.solve.radiosity
     }
 
+    /// The mean radiosity of the leaves `keep` accepts over the area light reaches, Σ o A B / Σ o A (o the
+    /// open shares, [`Engine::open_shares`]): in a closed scene of one reflectance ρ and emission E, the
+    /// furnace's E/(1 − ρ) wherever the solution keeps its light, occluders or not. Zero without open area.
+    pub fn open_mean_radiosity(&self, keep: impl Fn(&N) -> bool) -> Rgb {
+        let (mut sum, mut area) = (Rgb::ZERO, 0.0);
+        for (i, node) in self.tree.nodes.iter().enumerate() {
+            if self.tree.children[i].1 == 0 && keep(node) {
+                let w = node.area() * self.solve.open[i];
+                sum += w * self.solve.radiosity[i];
+                area += w;
+            }
+        }
+        if area > 0.0 { sum / area } else { Rgb::ZERO }
+    }
+
     /// The radiosity of leaf `i` at `point` on it, as its transport evaluates it from the leaf's radiosity
     /// and exitance ([`Transport::radiosity_at`]; by default the leaf's radiosity, constant over it): what a
     /// point answer reads of the solution.

@@ -17,7 +17,7 @@ use std::fmt::Debug;
 
 use glam::DVec3;
 use radlab_hierarchical::{
-    GatherAt, LinearState, Link, NodeKind, NodeView, PatchKernel, Transport,
+    GatherAt, LinearState, Link, NodeKind, NodeView, Patch, PatchKernel, Transport,
 };
 use radlab_kernels::form_factor::{VisibilitySampling, receiver_points};
 use radlab_scene::Rgb;
@@ -341,6 +341,10 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
 
     fn source_leaf_weight(&self, leaf: &ClusterNode<'a>, recv: &ClusterNode<'a>) -> Option<f64> {
         Some(self.patches.source_weight(leaf.patch()?, recv.patch()?))
+    }
+
+    fn open_share(&self, leaf: &ClusterNode<'a>) -> Option<f64> {
+        Transport::<Patch>::open_share(&self.patches, leaf.patch()?)
     }
 
     fn deliver(&self, h: &mut M::Irradiance, c: &M::Coefficient, flux: Rgb) {

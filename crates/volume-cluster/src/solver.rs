@@ -67,7 +67,8 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         params.validate()?;
         let p = params.engine.clone();
         let min_size = p.resolve_min_size(scene)?;
-        let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather);
+        let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather)
+            .with_open_shares(scene);
         let before = accel.rays_cast();
         let enclosures = crate::enclosure::enclosures(scene, accel, seed);
         let transport = ClusterTransport::new(patches, accel, p.visibility, p.quadrature, seed)

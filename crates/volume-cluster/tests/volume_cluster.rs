@@ -465,11 +465,19 @@ fn cornell_box_approaches_hierarchical_radiosity_as_epsilon_falls() {
     let mut h =
         HierarchicalSolver::new(&scene, &accel, HierarchicalParams::default(), 1).expect("solver");
     solve(&mut h);
-    // Per-face area means of the hierarchical leaves.
-    let mut reference = vec![Rgb::ZERO; scene.face_count()];
-    for (f, a, b) in h.leaves() {
-        reference[f] += a * b / scene.faces[f].area;
+    // Per-face means of the hierarchical leaves over their open areas (the floor under the blocks, which
+    // light never reaches, left out), as the volume-cluster engine pulls a face's radiosity up.
+    let e = h.engine();
+    let (mut sum, mut open_area) = (
+        vec![Rgb::ZERO; scene.face_count()],
+        vec![0.0; scene.face_count()],
+    );
+    for i in (0..e.nodes().len() as u32).filter(|&i| e.is_leaf(i)) {
+        let (p, o) = (&e.nodes()[i as usize], e.open_shares()[i as usize]);
+        sum[p.face] += o * p.area * e.radiosity()[i as usize];
+        open_area[p.face] += o * p.area;
     }
+    let reference: Vec<Rgb> = sum.iter().zip(&open_area).map(|(s, a)| *s / *a).collect();
     let mut errors = Vec::new();
     for eps in [1e-2, 1e-3, 1e-4] {
         let mut s = VolumeClusterSolver::new(&scene, &accel, params(Transfer::Alpha, eps), 1)
@@ -608,4 +616,59 @@ fn mean_clamped_cosine_is_within_its_bound_of_the_faces() {
             "θ {theta}: worst {worst} of bound {bound}"
         );
     }
+}
+
+/// An occluded furnace (radlab-testkit's `cornell_furnace`: the Cornell box closed by a front wall, every
+/// surface at ρ = 0.5 and E = 1) has B = E/(1 − ρ) = 2 wherever light reaches, blocks or not, so the mean
+/// radiosity of the walls', ceiling's and blocks' leaves (no contact seals any of them) must be 2 under every
+/// transfer. The floor's leaves along the blocks' feet lie partly under them: held as area means and sent from
+/// their whole area, they sent into the blocks' undersides the light their open parts reflect (Baum et al.
+/// 1991's leak) until the transport estimated their open shares. Here the leak was smaller than at face
+/// clusters (the mean measured −0.29% without open shares, +0.19% with them; the method's signed error on
+/// the Cornell box went from −0.88% to −0.12%), so the bound, the ±0.3% Cornell bias radlab's defaults are
+/// held to (docs/defaults.md), does not tell the two apart: that the floor's straddling leaves get open
+/// shares between 0 and 1 does.
+#[test]
+fn an_occluded_furnace_keeps_its_light() {
+    let scene = radlab_testkit::cornell_furnace(0.5, 1.0);
+    let accel = Accel::new(&scene);
+    // Off the floor: no contact seals any part of the walls, the ceiling or the blocks.
+    let off_floor = |n: &ClusterNode<'_>| n.face().is_some_and(|f| scene.faces[f].centroid.y > 0.0);
+    for transfer in [Transfer::Isotropic, Transfer::Alpha, Transfer::Directional] {
+        let p = VolumeClusterParams {
+            transfer,
+            ..VolumeClusterParams::default()
+        };
+        let mut s = VolumeClusterSolver::new(&scene, &accel, p, 1).expect("solver");
+        solve(&mut s);
+        let (mean, straddling) = match &s {
+            VolumeClusterSolver::Isotropic(s) => furnace_leaves(s, off_floor),
+            VolumeClusterSolver::Alpha(s) => furnace_leaves(s, off_floor),
+            VolumeClusterSolver::Directional(s) => furnace_leaves(s, off_floor),
+        };
+        let bias = mean / 2.0 - 1.0;
+        assert!(
+            bias.abs() <= 3e-3,
+            "{transfer:?}: the mean radiosity off the floor {mean:.5} against 2: bias {:+.3}%",
+            100.0 * bias
+        );
+        assert!(
+            straddling > 0,
+            "{transfer:?}: no leaf straddles the blocks' feet (open share strictly between 0 and 1)"
+        );
+    }
+}
+
+/// The mean radiosity of the leaves `keep` accepts over their open areas, and how many leaves straddle a
+/// contact (open share strictly between 0 and 1).
+fn furnace_leaves<'a, M: TransferMode>(
+    s: &ClusterSolver<'a, M>,
+    keep: impl Fn(&ClusterNode<'a>) -> bool,
+) -> (f64, usize) {
+    let e = s.engine();
+    let straddling = (0..e.nodes().len() as u32)
+        .filter(|&i| e.is_leaf(i) && e.open_shares()[i as usize] > 0.0)
+        .filter(|&i| e.open_shares()[i as usize] < 1.0)
+        .count();
+    (e.open_mean_radiosity(keep).x, straddling)
 }
