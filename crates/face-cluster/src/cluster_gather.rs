@@ -254,11 +254,11 @@ impl ClusterGather {
                 (f, leaves)
             })
             .collect();
-        // A split face's value (its share of its ancestors' power vectors) is its leaves' mean over open areas.
+        // A split face's value (its share of its ancestors' power vectors) is its leaves' area mean.
         let values: Vec<Rgb> = (0..scene.face_count())
             .into_par_iter()
             .map(|f| match patches.get(&f) {
-                Some(leaves) => open_area_mean(leaves),
+                Some(leaves) => area_mean(leaves),
                 None => first.radiosity_at(ctx, accel, f, scene.faces[f].centroid),
             })
             .collect();
@@ -475,17 +475,11 @@ impl FarField for TreeFarField<'_, '_> {
     }
 }
 
-/// The mean of `leaves`' radiosities over their open areas, Σ o A B / Σ o A (their area mean where every
-/// leaf is sealed; zero for no area): the radiosity a split face sends from its open part, as the hierarchical
-/// engine pulls it up its tree (a visibility ray toward the face's sealed part is blocked, so its power
-/// vector carries the sealed share already).
-pub fn open_area_mean(leaves: &[ElementValue]) -> Rgb {
-    let mean = |w: &dyn Fn(&ElementValue) -> f64| {
-        let weight: f64 = leaves.iter().map(w).sum();
-        let sum = leaves.iter().fold(Rgb::ZERO, |s, l| s + l.radiosity * w(l));
-        (weight > 0.0).then(|| sum / weight)
-    };
-    mean(&|l| l.open * l.polygon.area())
-        .or_else(|| mean(&|l| l.polygon.area()))
-        .unwrap_or(Rgb::ZERO)
+/// The area mean of `leaves`' radiosities (zero for no area).
+pub fn area_mean(leaves: &[ElementValue]) -> Rgb {
+    let area: f64 = leaves.iter().map(|l| l.polygon.area()).sum();
+    let sum = leaves
+        .iter()
+        .fold(Rgb::ZERO, |s, l| s + l.radiosity * l.polygon.area());
+    if area > 0.0 { sum / area } else { Rgb::ZERO }
 }

@@ -68,7 +68,7 @@ use serde::{Deserialize, Serialize};
 use crate::clamped_irradiance::ClampedIrradiance;
 use crate::cluster_gather::{
     ClusterGather, DEFAULT_OPENING, DEFAULT_VALUES_OPENING, GatherValues, NearField, TreeFarField,
-    open_area_mean,
+    area_mean,
 };
 use crate::face_node::{FaceContext, FaceNode};
 use crate::irradiance_gradient::IrradianceField;
@@ -625,7 +625,7 @@ impl<'a> FaceClusterSolver<'a> {
             let values: Vec<Rgb> = (0..k)
                 .into_par_iter()
                 .map(|f| match patches.get(&f) {
-                    Some(leaves) => open_area_mean(leaves),
+                    Some(leaves) => area_mean(leaves),
                     None => self.constant_at(f, self.scene.faces[f].centroid),
                 })
                 .collect();
