@@ -37,7 +37,7 @@
 //! the engine's pulled area mean) rather than power vectors; the α alternative (Σ over the roots of
 //! max(0, p_root·d)) would cost a pass over the roots below a volume per link and pass, and the oracle splits
 //! volume links until their bound is below ε anyway. Parameters: those of
-//! `hierarchical` (`lazy_linking` excepted) with `error_norm = power` and `epsilon = 1e-4` by default, and
+//! `hierarchical` (`lazy_linking` excepted) with `error_norm = power` and `epsilon = 7e-5` by default, and
 //! volume clusters' `row_normalisation` (`off` by default; `closed-scenes` rescales each leaf's row to one in
 //! a scene the enclosure rays find closed: the concentric spheres and a 192-face furnace sphere then hold
 //! ρ = 0.999 within 1e-6, 10⁴-face concentric spheres within 0.8%).
