@@ -153,9 +153,10 @@ pub fn point_key(face: FaceId, y: glam::DVec3) -> u64 {
     k
 }
 
-/// The open fractions of `elements` (each given as its polygon and face by `part`), on rayon threads, element k
-/// keyed `first_key + k`, and the rays cast: the same values on any number of threads.
-pub fn open_fractions<T: Sync>(
+/// The measured open shares of `elements` (each given as its polygon and face by `part`; 0: no probe point
+/// open), on rayon threads, element k keyed `first_key + k`, and the rays cast: the same values on any number
+/// of threads.
+pub fn open_shares<T: Sync>(
     scene: &Scene,
     accel: &Accel,
     elements: &[T],
@@ -168,12 +169,24 @@ pub fn open_fractions<T: Sync>(
         .enumerate()
         .map(|(k, e)| {
             let (polygon, face) = part(e);
-            let (o, rays) = open_share(scene, accel, polygon, face, seed, first_key + k as u64);
-            (open_fraction(o), rays)
+            open_share(scene, accel, polygon, face, seed, first_key + k as u64)
         })
         .collect();
     let rays = found.iter().map(|f| f.1).sum();
     (found.into_iter().map(|f| f.0).collect(), rays)
+}
+
+/// The open fractions of `elements` ([`open_shares`] through [`open_fraction`]) and the rays cast.
+pub fn open_fractions<T: Sync>(
+    scene: &Scene,
+    accel: &Accel,
+    elements: &[T],
+    part: impl Fn(&T) -> (&Polygon, FaceId) + Sync,
+    seed: u64,
+    first_key: u64,
+) -> (Vec<f64>, u64) {
+    let (shares, rays) = open_shares(scene, accel, elements, part, seed, first_key);
+    (shares.into_iter().map(open_fraction).collect(), rays)
 }
 
 #[cfg(test)]

@@ -287,20 +287,26 @@ pub(crate) fn refine(
                 .zip(&mesh.radiosity[c0..c0 + 4])
                 .map(|(c, &b)| c.open_area() * b)
                 .sum();
-            let same_open = children.iter().all(|c| c.open == parent.open);
+            let same_open = children
+                .iter()
+                .all(|c| c.open == parent.open && c.sealed == parent.sealed);
             let patch = &mut mesh.patches[parent.patch as usize];
             let d_sum = after - parent.open_area() * mesh.radiosity[e as usize];
             let before = patch.unshot;
             if same_open {
                 // The children's areas sum to their parent's (up to rounding): the open area stays.
-                patch.unshot += d_sum / patch.open_area;
+                if patch.open_area > 0.0 {
+                    patch.unshot += d_sum / patch.open_area;
+                }
             } else {
                 let after_area: f64 = children.iter().map(|c| c.open_area()).sum();
                 let d_area = after_area - parent.open_area();
                 let b = patch.shot + patch.unshot;
                 let area = patch.open_area + d_area;
-                patch.unshot = (b * patch.open_area + d_sum) / area - patch.shot;
-                patch.open_area = area;
+                if area > 0.0 {
+                    patch.unshot = (b * patch.open_area + d_sum) / area - patch.shot;
+                }
+                patch.open_area = area.max(0.0);
             }
             patch.lit |= patch.unshot != before;
         }
