@@ -395,9 +395,9 @@ pub(crate) fn book(
 ) -> Rgb {
     let mut returned = Rgb::ZERO;
     for (&e, &f) in leaves.iter().zip(factors) {
+        let el = &elements[e as usize];
         // A sealed element (no open area) gains nothing its patch sends on.
-        if f > 0.0 && elements[e as usize].open_area() > 0.0 {
-            let el = &elements[e as usize];
+        if f > 0.0 && el.open_area() > 0.0 {
             let gain = gain(scene, el, amount, f);
             returned += el.open_area() * gain;
             let patch = &mut patches[el.patch as usize];
