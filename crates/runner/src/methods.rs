@@ -197,7 +197,7 @@ pub fn methods() -> Vec<MethodInfo> {
             validate: |table| {
                 radlab_face_cluster::FaceClusterSolveParams::from_table(table).map(|_| ())
             },
-            // Defaults (ε = 1e-4, final-gather answers). Deterministic; like volume clusters, its cluster links'
+            // Defaults (ε = 7e-5, final-gather answers). Deterministic; like volume clusters, its cluster links'
             // row sums are not exact, so the generic 1% balance applies.
             test: TestSettings {
                 params: |_| toml::Table::new(),

@@ -2,7 +2,7 @@
 //!
 //! Small scenes that several crates' tests share (the conformance suite, the cluster methods' own tests):
 //! builders for quads, grids and boxes, the closed unit room lit by one ceiling quad (every reflectance
-//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, the Cornell box closed into a furnace ([`cornell_furnace`]), a block standing on the floor ([`sealed`]), and a scene
+//! positive, so emitted power must equal absorbed power), hollow boxes with sealed interiors, two rooms split by a thin wall, the Cornell box closed into a furnace ([`cornell_furnace`]) or lit by its lamp alone ([`cornell_lamp_lit`]), a block standing on the floor ([`sealed`]), and a scene
 //! scaled by a factor (results must not depend on it); and the comparison of several seeds' mean answer with a
 //! reference's ([`ChannelMeans`]). Test support, kept in one place so no crate carries its own copy; nothing in
 //! the solvers uses it.
@@ -121,16 +121,47 @@ pub fn cornell_furnace(rho: f64, e: f64) -> Scene {
         b.add_polygon_points(cornell.polygon(f).vertices(), m, "cornell")
             .expect("face");
     }
-    let front = [
-        dvec3(0.0, 0.0, 0.0),
-        dvec3(552.8, 0.0, 0.0),
-        dvec3(556.0, 548.8, 0.0),
-        dvec3(0.0, 548.8, 0.0),
-    ];
-    b.add_polygon_points(&front, m, "front wall")
+    b.add_polygon_points(&CORNELL_FRONT, m, "front wall")
         .expect("front wall");
     b.build().expect("scene")
 }
+
+/// The same closed Cornell box lit by its own lamp: every face of reflectance `rho`, the builtin's light of
+/// emission `lamp` and nothing else emitting, the two blocks kept or left out. Closed and of one reflectance,
+/// it absorbs what the lamp emits: the faces' power Σ A B is A_lamp E / (1 − ρ), however unevenly the lamp
+/// lights them. The blocks' faces are those with a vertex strictly between the floor (y = 0) and the
+/// ceiling (y = 548.8). Faces: the builtin's in its order (less the blocks'), then the front wall.
+pub fn cornell_lamp_lit(rho: f64, lamp: f64, blocks: bool) -> Scene {
+    let cornell = radlab_scene::builtin("cornell").expect("builtin Cornell box");
+    let mut b = SceneBuilder::new("closed lamp-lit Cornell box");
+    let grey = material(&mut b, "grey", rho, 0.0);
+    let light = material(&mut b, "lamp", rho, lamp);
+    for f in 0..cornell.face_count() {
+        let polygon = cornell.polygon(f);
+        let vertices = polygon.vertices();
+        let block = vertices.iter().any(|v| v.y > 0.0 && v.y < 548.8);
+        if block && !blocks {
+            continue;
+        }
+        let m = if cornell.emission(f).max_element() > 0.0 {
+            light
+        } else {
+            grey
+        };
+        b.add_polygon_points(vertices, m, "cornell").expect("face");
+    }
+    b.add_polygon_points(&CORNELL_FRONT, grey, "front wall")
+        .expect("front wall");
+    b.build().expect("scene")
+}
+
+/// The wall that closes the published Cornell box's open side, where its floor and ceiling end at z = 0.
+const CORNELL_FRONT: [DVec3; 4] = [
+    dvec3(0.0, 0.0, 0.0),
+    dvec3(552.8, 0.0, 0.0),
+    dvec3(556.0, 548.8, 0.0),
+    dvec3(0.0, 548.8, 0.0),
+];
 
 /// A closed box (outward faces) on [lo, hi] with a closed unlit interior: inward faces inset by 1e-3 of its size.
 pub fn hollow_box(b: &mut SceneBuilder, lo: DVec3, hi: DVec3) {

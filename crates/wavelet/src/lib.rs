@@ -14,7 +14,7 @@
 //! | name | default | meaning |
 //! |---|---|---|
 //! | `basis` | `m2` | `haar`, `f2`, `f3`, `m2`, `m3` |
-//! | `epsilon` | 0.01 | refinement threshold (dimensionless) |
+//! | `epsilon` | 0.003 | refinement threshold (dimensionless; chosen on the defaults suite, docs/defaults.md) |
 //! | `oracle` | `bekaert-willems` | `bekaert-willems`, `f`, `bf` |
 //! | `visibility` | `per-pair` | `per-pair` (a ray per pair of quadrature nodes) or `per-link` (one fraction scaling the tensor) |
 //! | `gather` | `leaf` | `leaf` (each link's tensor re-integrated at every leaf below its receiver with the link's visibility: exact form-factor sums) or `receiver` (the classic wavelet gather, pushed down by the two-scale relation) |

@@ -40,7 +40,8 @@ pub struct WaveletParams {
     /// (Alpert multiwavelets, tensor Legendre of degree 1 / 2).
     pub basis: Basis,
     /// Refinement threshold: a link whose error estimate exceeds it is refined; dimensionless (relative to
-    /// the scene's mean radiosity for bekaert-willems and bf).
+    /// the scene's mean radiosity for bekaert-willems and bf). Default 0.003, chosen on the defaults suite's
+    /// worst scenes (docs/defaults.md).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: f64,
     /// How a link's error is estimated: bekaert-willems (the link's reproduction at the receiver's nodes
@@ -90,7 +91,7 @@ impl Default for WaveletParams {
     fn default() -> Self {
         Self {
             basis: Basis::M2,
-            epsilon: 0.01,
+            epsilon: 0.003,
             oracle: WaveletOracle::BekaertWillems,
             visibility: Visibility::PerPair,
             gather: WaveletGather::Leaf,
