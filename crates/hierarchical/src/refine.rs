@@ -192,12 +192,17 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                             scale,
                         );
                         let error = (!l.overlap()).then(|| {
+                            let (first, count) = self.tree.children[l.source() as usize];
+                            let kids = first as usize..(first + count) as usize;
                             let light = SourceLight {
                                 oracle,
                                 weight: w,
                                 radiosity: self.solve.radiosity[l.source() as usize],
                                 exitance: &self.solve.exitance[l.source() as usize],
                                 scale,
+                                children: &self.tree.nodes[kids.clone()],
+                                child_radiosity: &self.solve.radiosity[kids.clone()],
+                                child_exitance: &self.solve.exitance[kids],
                             };
                             self.kernel.link_error(recv, src, l, &light)
                         });

@@ -499,6 +499,9 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
                             radiosity: light_b,
                             exitance: &rx[s as usize],
                             scale,
+                            children: &[],
+                            child_radiosity: &[],
+                            child_exitance: &[],
                         };
                         self.kernel.link_error(recv, src, l, &light)
                     });

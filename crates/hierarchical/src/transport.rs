@@ -129,7 +129,7 @@ pub struct LinkError {
 /// What the refinement knows of a link's source when it asks for the link's error
 /// ([`Transport::link_error`]).
 #[derive(Clone, Copy, Debug)]
-pub struct SourceLight<'a, X> {
+pub struct SourceLight<'a, N, X> {
     /// The oracle the parameters name.
     pub oracle: Oracle,
     /// The link's light weight: max over channels of ρ_r B_s over the scene's area-mean radiosity
@@ -141,6 +141,13 @@ pub struct SourceLight<'a, X> {
     pub exitance: &'a X,
     /// The scene's area-mean radiosity (max channel), the light weight's scale.
     pub scale: f64,
+    /// The source's children (empty for a leaf, and in linkless shooting), with their radiosity and
+    /// exitance: what an estimate with a source-side term compares the source's own state against.
+    pub children: &'a [N],
+    /// The children's radiosity, aligned with `children`.
+    pub child_radiosity: &'a [Rgb],
+    /// The children's exitance state, aligned with `children`.
+    pub child_exitance: &'a [X],
 }
 
 /// What a source sends along a link in one pass ([`Transport::emit`]) and a target receives through its
@@ -196,7 +203,7 @@ pub trait Transport<N: NodeKind>: Sync {
         recv: &N,
         src: &N,
         link: &Self::Link,
-        light: &SourceLight<'_, Self::Exitance>,
+        light: &SourceLight<'_, N, Self::Exitance>,
     ) -> LinkError {
         let _ = (recv, src);
         link.error(light.oracle, light.weight)

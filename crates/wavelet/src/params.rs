@@ -45,7 +45,8 @@ pub struct WaveletParams {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: f64,
     /// How a link's error is estimated: bekaert-willems (the link's reproduction at the receiver's nodes
-    /// against the point-to-element kernel), f (form factor) or bf (radiosity x form factor).
+    /// against the point-to-element kernel, plus the source's children's misfit to its function), f (form
+    /// factor) or bf (radiosity x form factor).
     pub oracle: WaveletOracle,
     /// How visibility enters a link: per-pair (one ray per pair of quadrature nodes) or per-link (one
     /// fraction of 16 jittered rays scaling the whole tensor).
