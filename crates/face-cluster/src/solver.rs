@@ -40,10 +40,12 @@
 //! (Baum, Mann, Smith & Winget 1991's shadow leaks): measured at 0.5–2.4 W/m² on the defaults suite's small
 //! scenes, where the exact answer is 0. A face is this method's smallest element and has no open share, so
 //! the test is made per point: every answer first casts radlab-kernels'
-//! [`point_sealed`] probe (cosine rays until one escapes or meets a front face, up to 32; an open point
-//! usually pays one ray, charged to answering as the runner counts the accelerator's rays), and a point whose
-//! every ray meets the back of a face answers its emission E: one-sided faces absorb at their backs, so it
-//! receives nothing. The solution itself (and its energy) is unchanged.
+//! [`point_sealed`] probe (cosine rays until one escapes or meets a front face beyond a small gap, up to
+//! 128; an open point usually pays one ray, charged to answering as the runner counts the accelerator's
+//! rays), and a point whose every ray meets the back of a face, or the front of one whose plane passes
+//! within that gap (a block's bottom face just above the floor), answers its emission E: one-sided faces
+//! absorb at their backs, so it receives nothing, and light reaches a gap only through its mouth. The
+//! solution itself (and its energy) is unchanged.
 
 use std::sync::{Arc, OnceLock};
 
@@ -668,10 +670,14 @@ impl Solution for FaceClusterSolver<'_> {
     }
 
     /// A point no light reaches ([`point_sealed`]: under a block standing on the floor) answers its
-    /// emission; every other point the reconstruction's answer.
+    /// emission; every other point the reconstruction's answer. The shared final gather
+    /// ([`NearField::SubPolygons`]) makes the same test itself.
     fn radiosity_at(&self, face: FaceId, point: DVec3) -> Rgb {
         if face >= self.scene.face_count() {
             return Rgb::ZERO;
+        }
+        if self.gather_opening.is_some() && self.near_field == NearField::SubPolygons {
+            return self.near_field_answer(face, point);
         }
         let key = point_key(face, point);
         if point_sealed(
@@ -688,9 +694,6 @@ impl Solution for FaceClusterSolver<'_> {
             return self.scene.emission(face);
         }
         if let Some(opening) = self.gather_opening {
-            if self.near_field == NearField::SubPolygons {
-                return self.near_field_answer(face, point);
-            }
             return self
                 .cluster_gather(opening)
                 .radiosity_at(&self.ctx, self.accel, face, point);

@@ -35,6 +35,11 @@ impl SurfaceOutput {
         }
     }
 
+    /// How points are answered.
+    pub fn reconstruction(&self) -> Reconstruction {
+        self.answer.kind()
+    }
+
     /// Rays and kernel evaluations the final gather has spent answering so far (charged to answering, not
     /// to the steps).
     pub fn gather_work(&self) -> (u64, u64) {

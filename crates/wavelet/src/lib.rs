@@ -60,9 +60,10 @@
 //! over its open part, as it does for hierarchical radiosity: a link's delivery is credited to its
 //! receiver's open part (gain 1/ō on all M² coefficients, ō weighted by the targets' T_00), a wholly sealed
 //! leaf receives and sends nothing, and inner nodes pull means over open areas; the power delivered is
-//! unchanged (the share enters per leaf: [`transport`]). A point answer inside a leaf with o < 1 first tests
-//! the point ([`radlab_kernels::open_fraction::point_sealed`], up to 32 rays, charged to answering): a point
-//! under the block answers its emission, as the exact solution does, whatever the reconstruction.
+//! unchanged (the share enters per leaf: [`transport`]). A point answer first tests the point
+//! ([`radlab_kernels::open_fraction::point_sealed`], up to 128 rays, charged to answering; the basis and
+//! smoothed answers inside leaves with o < 1, the final gather at every point, as it does for every method):
+//! a point under the block answers its emission, as the exact solution does, whatever the reconstruction.
 //!
 //! ## Not done
 //! Linkless shooting does not estimate open shares (every leaf open; its shots deliver without the

@@ -2,6 +2,7 @@
 //! engine, driven through the [`Solver`] trait, answering at points from the leaves' basis functions, their
 //! vertex-averaged means or a final gather (the engine's shared output layer).
 
+use radlab_answer::Reconstruction;
 use radlab_hierarchical::output::locate;
 use radlab_hierarchical::{Engine, Patch, SurfaceOutput};
 use radlab_kernels::open_fraction::{POINT_SEAL_RAYS, point_key, point_sealed};
@@ -153,10 +154,12 @@ impl Solution for WaveletSolver<'_> {
     }
 
     /// The reconstruction's answer; at a point of a leaf partly or wholly sealed (open share below 1), a
-    /// point probe first ([`point_sealed`]): a sealed point answers its emission only.
+    /// point probe first ([`point_sealed`]): a sealed point answers its emission only. The shared final
+    /// gather makes that test itself, at every point.
     fn radiosity_at(&self, face: FaceId, point: glam::DVec3) -> Rgb {
         with_engine!(&self.engines, e => {
-            let partly_sealed = locate(e, face, point)
+            let gathers = self.output.reconstruction() == Reconstruction::FinalGather;
+            let partly_sealed = !gathers && locate(e, face, point)
                 .and_then(|i| e.open_shares().get(i as usize).copied())
                 .is_some_and(|o| o < 1.0);
             if partly_sealed && face < self.scene.face_count() {
