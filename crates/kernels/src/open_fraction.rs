@@ -111,9 +111,8 @@ fn ray_opens(
 /// points cast ([`DEFAULT_OPEN_RAYS`]), since a point wrongly called sealed answers 0, where a gather would
 /// answer it. A point with 3% of its cosine-weighted hemisphere open passes for sealed with probability
 /// 0.97¹²⁸ ≈ 2%. On a floor 4 gap heights inside a covering's straight edge 1.5% is open (by the slit's
-/// geometry), sealed with probability 14% (61% at 32 rays, the former default, which answered such a point
-/// in the furnished room 0 for three methods of five). An open point usually pays one ray; a sealed one all
-/// of them.
+/// geometry), sealed with probability 14% (61% at 32 rays, the former default). An open point usually pays
+/// one ray; a sealed one all of them.
 pub const POINT_SEAL_RAYS: u32 = 128;
 
 /// A front face whose plane passes closer than this share of the scene's diagonal to a point (1e-3: 0.9 mm
