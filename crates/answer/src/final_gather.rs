@@ -487,11 +487,12 @@ impl FinalGather {
             .flat_map(|q| q.split4())
             .map(|sub| (sub, sub.split4()))
             .collect();
+        let partly_sealed = src.open < 1.0;
         let sealed: Vec<[bool; 4]> = subs
             .iter()
             .map(|(_, quarters)| {
                 quarters.map(|quarter| {
-                    if src.open >= 1.0 {
+                    if !partly_sealed {
                         return false;
                     }
                     let q = quarter.centroid();
@@ -512,7 +513,7 @@ impl FinalGather {
         // The far part is gathered at the centroid, or where that is sealed at the open quarter centroid
         // nearest it (from a sealed point every far ray would be stopped); distances in millionths of the
         // element's diameter, ties to the first, so that the choice does not change with the scene's scale.
-        let c_sealed = src.open < 1.0 && {
+        let c_sealed = partly_sealed && {
             let (shut, probe) = point_sealed(
                 scene,
                 accel,
@@ -584,13 +585,7 @@ impl FinalGather {
             .iter()
             .zip(&sealed)
             .map(|((_, quarters), shut)| {
-                let mut a = quarters.map(|quarter| quarter.area());
-                for (a, shut) in a.iter_mut().zip(shut) {
-                    if *shut {
-                        *a = 0.0;
-                    }
-                }
-                a
+                std::array::from_fn(|k| if shut[k] { 0.0 } else { quarters[k].area() })
             })
             .collect();
         let mut values: Vec<(Polygon, [(DVec3, Rgb); 4])> = subs

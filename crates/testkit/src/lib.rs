@@ -114,16 +114,9 @@ pub fn furnace_with_cube(rho: f64, e: f64, lift: f64) -> Scene {
 /// only their insides, receives nothing). The front wall's corners are where the published floor and ceiling
 /// end at z = 0. Faces: the builtin's, in its order, then the front wall.
 pub fn cornell_furnace(rho: f64, e: f64) -> Scene {
-    let cornell = radlab_scene::builtin("cornell").expect("builtin Cornell box");
     let mut b = SceneBuilder::new("closed Cornell furnace");
     let m = material(&mut b, "furnace", rho, e);
-    for f in 0..cornell.face_count() {
-        b.add_polygon_points(cornell.polygon(f).vertices(), m, "cornell")
-            .expect("face");
-    }
-    b.add_polygon_points(&CORNELL_FRONT, m, "front wall")
-        .expect("front wall");
-    b.build().expect("scene")
+    closed_cornell(b, true, |_| m)
 }
 
 /// The same closed Cornell box lit by its own lamp: every face of reflectance `rho`, the builtin's light of
@@ -132,25 +125,27 @@ pub fn cornell_furnace(rho: f64, e: f64) -> Scene {
 /// lights them. The blocks' faces are those with a vertex strictly between the floor (y = 0) and the
 /// ceiling (y = 548.8). Faces: the builtin's in its order (less the blocks'), then the front wall.
 pub fn cornell_lamp_lit(rho: f64, lamp: f64, blocks: bool) -> Scene {
-    let cornell = radlab_scene::builtin("cornell").expect("builtin Cornell box");
     let mut b = SceneBuilder::new("closed lamp-lit Cornell box");
     let grey = material(&mut b, "grey", rho, 0.0);
     let light = material(&mut b, "lamp", rho, lamp);
+    closed_cornell(b, blocks, |emits| if emits { light } else { grey })
+}
+
+/// The builtin Cornell box's faces in its order (the blocks' left out unless `blocks`: the faces with a vertex
+/// strictly between the floor, y = 0, and the ceiling, y = 548.8), then [`CORNELL_FRONT`], each of the material
+/// `pick(emits)` gives by whether the builtin's face emits (the front wall: `pick(false)`).
+fn closed_cornell(mut b: SceneBuilder, blocks: bool, pick: impl Fn(bool) -> u32) -> Scene {
+    let cornell = radlab_scene::builtin("cornell").expect("builtin Cornell box");
     for f in 0..cornell.face_count() {
         let polygon = cornell.polygon(f);
         let vertices = polygon.vertices();
-        let block = vertices.iter().any(|v| v.y > 0.0 && v.y < 548.8);
-        if block && !blocks {
+        if !blocks && vertices.iter().any(|v| v.y > 0.0 && v.y < 548.8) {
             continue;
         }
-        let m = if cornell.emission(f).max_element() > 0.0 {
-            light
-        } else {
-            grey
-        };
+        let m = pick(cornell.emission(f).max_element() > 0.0);
         b.add_polygon_points(vertices, m, "cornell").expect("face");
     }
-    b.add_polygon_points(&CORNELL_FRONT, grey, "front wall")
+    b.add_polygon_points(&CORNELL_FRONT, pick(false), "front wall")
         .expect("front wall");
     b.build().expect("scene")
 }
