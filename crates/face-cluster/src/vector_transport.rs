@@ -215,7 +215,8 @@ impl VectorTransport<'_> {
     /// above its plane: the source's exact irradiance vector at the receiver's centroid per unit radiosity,
     /// Φ(c_R) = (1/2π) Σ_edges Θ_e û_e (Arvo 1994), so that each receiving face gets n·Φ B_S, the exact
     /// point-to-polygon factor (Baum, Rushmeier & Winget 1989, eq. 3) times the source's radiosity.
-    /// `None` when the link is not of that kind; `Some(None)` when nothing is transferred.
+    /// `None` when the link is not of that kind; `Some(None)` when nothing is transferred; an overlapping link
+    /// (for the oracle to split) when every visibility sample is blocked but it could carry more than ε.
     fn near_face_link(
         &self,
         recv: &FaceNode<'_>,
@@ -245,7 +246,14 @@ impl VectorTransport<'_> {
         }
         let v = self.visibility(recv, src);
         if v <= 0.0 {
-            return Some(None);
+            // No sampled segment passes. As on the general path, that is no proof that nothing does: a lamp
+            // over half a room's floor whose few sample points stand under a table, a ball and a platform
+            // lost the whole half's direct light. Split while it could carry more than ε unoccluded.
+            let f_src = (f * recv.area() / src.area()).min(1.0);
+            return Some(
+                self.above_final_epsilon(recv, f, f_src)
+                    .then(|| Link::overlapping(src_id)),
+            );
         }
         Some(Some(Link {
             source: src_id,
