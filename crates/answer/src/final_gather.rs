@@ -137,7 +137,10 @@ impl GatherSettings {
     /// `indirect` rays toward the others; jittered points come from the query's stream `key` and the
     /// source's `stream`. Rays are added to `rays`. The share is that of the jittered points in front of the
     /// query's plane, the part of the source F_xj integrates over: a ray to a point behind it would leave
-    /// through the query's own face, which the ray test ignores (all of them when none is in front).
+    /// through the query's own face, which the ray test ignores. When none is in front the share is 0: the
+    /// part in front is a sliver no point fell in, and the rays behind can pass where no light does (from
+    /// a hollow box's inner wall into the 0.3 mm between its inner and outer faces, down to the floor the
+    /// box stands on: 1.3e-7 of the lit radiosity inside a closed unlit box).
     #[allow(clippy::too_many_arguments)]
     pub fn visible_share(
         &self,
@@ -254,7 +257,7 @@ impl GatherSettings {
                     if front > 0 {
                         seen as f64 / front as f64
                     } else {
-                        visible[..total].iter().filter(|&&v| v).count() as f64 / total as f64
+                        0.0
                     }
                 };
                 let Some(kernels) = weighting else {

@@ -21,8 +21,9 @@
 //! with F_ij the form factor from *all* of element i (its sealed points see nothing, so A_i F_ij already
 //! carries the factor o_i). Power P_i = o_i A_i B_i leaving element i's open part therefore reaches j as
 //! A_i F_ij B_i = (P_i / o_i) F_ij: a particle still leaves from a uniform point of the whole element, with
-//! its power divided by o_i. Those leaving sealed points die on the panel's back (share 1 − o_i), and the
-//! rest carry P_i / o_i × o_i = P_i on average, so the estimator stays unbiased for the open-area system with
+//! its power divided by o_i. Those leaving sealed points die on the panel's back, or at the front of a face
+//! over the gap they leave (a cube's bottom on the floor: `hit_closes` ends every flight the seal test would
+//! close), share 1 − o_i; the rest carry P_i / o_i × o_i = P_i on average, so the estimator stays unbiased for the open-area system with
 //! no per-point sealed test, and converges to what matrix radiosity solves on the same mesh and open
 //! fractions. Emitters need no factor: A_e E_e shot from all of element e is (o_e A_e E_e) / o_e. Where
 //! nothing is sealed, o = 1 and nothing changes.
@@ -42,7 +43,7 @@ use glam::DVec3;
 use radlab_answer::{
     ElementMesh, Reconstruction, Reconstructor, element_size, gouraud::ElementValue,
 };
-use radlab_kernels::open_fraction::open_fractions;
+use radlab_kernels::open_fraction::{SEAL_GAP_REL, hit_closes, open_fractions};
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{
     FaceId, Rgb, Scene,
@@ -169,8 +170,12 @@ impl Transport<'_> {
             sampling::uniform(rng),
         );
         let hit = self.accel.intersect_from(f, x, dir)?;
-        if self.scene.faces[hit.face].normal.dot(dir) >= 0.0 {
-            return None; // the back of a face absorbs
+        // The back of a face absorbs; so does the front of one over a gap the flight leaves (a cube's bottom
+        // lying on the floor): light from a sealed point never reaches the open scene, as the open fractions
+        // assume (module documentation).
+        let gap = SEAL_GAP_REL * self.scene.diagonal();
+        if hit_closes(self.scene, f, dir, hit.face, hit.t, gap) {
+            return None;
         }
         Some(self.mesh.locate(hit.face, hit.point))
     }
