@@ -491,28 +491,28 @@ impl FinalGather {
             .map(|sub| (sub, sub.split4()))
             .collect();
         let partly_sealed = src.open < 1.0;
-        let sealed: Vec<[bool; 4]> = subs
-            .iter()
-            .map(|(_, quarters)| {
-                quarters.map(|quarter| {
-                    if !partly_sealed {
-                        return false;
-                    }
-                    let q = quarter.centroid();
-                    let (sealed, probe) = point_sealed(
-                        scene,
-                        accel,
-                        src.face,
-                        q,
-                        DEFAULT_OPEN_RAYS,
-                        self.settings.seed,
-                        key ^ mix64(query_key(scene, src.face, q)),
-                    );
-                    rays += probe;
-                    sealed
+        let sealed: Vec<[bool; 4]> = if partly_sealed {
+            subs.iter()
+                .map(|(_, quarters)| {
+                    quarters.map(|quarter| {
+                        let q = quarter.centroid();
+                        let (sealed, probe) = point_sealed(
+                            scene,
+                            accel,
+                            src.face,
+                            q,
+                            DEFAULT_OPEN_RAYS,
+                            self.settings.seed,
+                            key ^ mix64(query_key(scene, src.face, q)),
+                        );
+                        rays += probe;
+                        sealed
+                    })
                 })
-            })
-            .collect();
+                .collect()
+        } else {
+            vec![[false; 4]; subs.len()]
+        };
         // The far part is gathered at the centroid, or where that is sealed at the open quarter centroid
         // nearest it (from a sealed point every far ray would be stopped); distances in millionths of the
         // element's diameter, ties to the first, so that the choice does not change with the scene's scale.
@@ -529,16 +529,18 @@ impl FinalGather {
             rays += probe;
             shut
         };
-        let diameter = src.polygon.diameter();
-        let c = subs
-            .iter()
-            .zip(&sealed)
-            .flat_map(|((_, quarters), shut)| quarters.iter().zip(shut))
-            .filter(|(_, shut)| !**shut)
-            .map(|(quarter, _)| quarter.centroid())
-            .min_by_key(|q| ((*q - c).length() / diameter * 1e6).round() as i64)
-            .filter(|_| c_sealed)
-            .unwrap_or(c);
+        let c = if c_sealed {
+            let diameter = src.polygon.diameter();
+            subs.iter()
+                .zip(&sealed)
+                .flat_map(|((_, quarters), shut)| quarters.iter().zip(shut))
+                .filter(|(_, shut)| !**shut)
+                .map(|(quarter, _)| quarter.centroid())
+                .min_by_key(|q| ((*q - c).length() / diameter * 1e6).round() as i64)
+                .unwrap_or(c)
+        } else {
+            c
+        };
         // The far part, as a mean radiosity over the hemisphere the near set leaves.
         let (mut far, mut f_near) = (Rgb::ZERO, 0.0);
         match far_field {

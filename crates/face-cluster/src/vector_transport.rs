@@ -244,12 +244,12 @@ impl VectorTransport<'_> {
             let behind = recv.hull().iter().all(|p| sn.dot(*p - s0) <= tol);
             return if behind { Some(None) } else { None };
         }
+        let f_src = (f * recv.area() / src.area()).min(1.0);
         let v = self.visibility(recv, src);
         if v <= 0.0 {
             // No sampled segment passes. As on the general path, that is no proof that nothing does: a lamp
             // over half a room's floor whose few sample points stand under a table, a ball and a platform
             // lost the whole half's direct light. Split while it could carry more than ε unoccluded.
-            let f_src = (f * recv.area() / src.area()).min(1.0);
             return Some(
                 self.above_final_epsilon(recv, f, f_src)
                     .then(|| Link::overlapping(src_id)),
@@ -259,7 +259,7 @@ impl VectorTransport<'_> {
             source: src_id,
             coefficient: v,
             f_recv: f as f32,
-            f_src: (f * recv.area() / src.area()).min(1.0) as f32,
+            f_src: f_src as f32,
             spread: f as f32,
             visibility: v as f32,
             overlap: false,
