@@ -360,6 +360,7 @@ mod tests {
 
     #[test]
     fn a_face_standing_beside_a_point_does_not_close_its_rays() {
+        use radlab_testkit::{grid, material};
         // A wall standing on the floor at x = 0.5 (facing -x, toward the floor's points at x < 0.5): points
         // of the floor 1e-4 from its foot meet its front within the seal gap with about half their rays, and
         // the rest of their hemisphere is open. The gap rule closes only faces that face the point's face
@@ -368,25 +369,12 @@ mod tests {
         // sealed whenever all 8 of their rays met the faces beside them, and closed furnace rooms at
         // ρ = 0.999 lost their balance.
         let mut b = SceneBuilder::new("wall on a floor");
-        let m = b
-            .add_material(Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"))
-            .expect("add");
-        let floor = [
-            DVec3::new(0.0, 0.0, 0.0),
-            DVec3::new(0.0, 0.0, 2.0),
-            DVec3::new(0.5, 0.0, 2.0),
-            DVec3::new(0.5, 0.0, 0.0),
-        ];
-        b.add_polygon_points(&floor, m, "floor").expect("floor");
-        let wall = [
-            DVec3::new(0.5, 0.0, 0.0),
-            DVec3::new(0.5, 0.0, 2.0),
-            DVec3::new(0.5, 2.0, 2.0),
-            DVec3::new(0.5, 2.0, 0.0),
-        ];
-        b.add_polygon_points(&wall, m, "wall").expect("wall");
+        let m = material(&mut b, "grey", 0.5, 0.0);
+        let (z, x) = (2.0 * DVec3::Z, 0.5 * DVec3::X);
+        grid(&mut b, DVec3::ZERO, z, x, 1, m);
+        grid(&mut b, x, z, 2.0 * DVec3::Y, 1, m);
         let scene = b.build().expect("scene");
-        assert!(scene.faces[1].normal.x < 0.0);
+        assert!(scene.faces[0].normal.y > 0.0 && scene.faces[1].normal.x < 0.0);
         let accel = Accel::new(&scene);
         let gap = SEAL_GAP_REL * scene.diagonal();
         let y = DVec3::new(0.5 - 1e-4, 0.0, 1.0);
