@@ -13,8 +13,12 @@ use radlab_method::SolveError;
 use radlab_scene::{FaceId, Polygon, Rgb, Scene};
 
 /// The default element size as a fraction of the scene's bounding-box diagonal, so every scene's scale gets the
-/// same mesh: 1/20 of the diagonal gives the Cornell box about 1,000 elements.
-pub const DEFAULT_ELEMENT_SIZE_REL: f64 = 0.05;
+/// same mesh: 1/25 of the diagonal gives the Cornell box about 1,700 elements. Chosen by the worst case of the
+/// suite of scenes in `experiments/defaults-suite.toml`: at 1/20 matrix, progressive and mesh Monte Carlo
+/// radiosity answered the Cornell box's contact shadows beside the blocks 22-30% off at their worst point (the
+/// element means there are those of strips 47 mm wide, lit parts and shadowed ones together), at 1/25 within
+/// 8-15% over three seeds, for about twice the time of matrix and progressive radiosity (docs/defaults.md).
+pub const DEFAULT_ELEMENT_SIZE_REL: f64 = 0.04;
 
 /// One element: a piece of an input face.
 #[derive(Clone, Copy, Debug)]

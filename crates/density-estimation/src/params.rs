@@ -52,7 +52,7 @@ pub struct DensityEstimationParams {
     pub group_angle: f64,
     /// How radiosity at a point is answered: density, mesh, final-gather or constant.
     pub reconstruction: DensityReconstruction,
-    /// Display-mesh element edge in scene units (mesh and final-gather answers); unset: 1/20 of the scene's
+    /// Display-mesh element edge in scene units (mesh and final-gather answers); unset: 1/25 of the scene's
     /// bounding diagonal.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(extend("exclusiveMinimum" = 0))]

@@ -34,7 +34,7 @@
 //! ## Parameters ([`MatrixParams`])
 //! | name | default | meaning |
 //! |---|---|---|
-//! | `element_size` | 1/20 of the bounding-box diagonal | longest element edge (scene units) |
+//! | `element_size` | 1/25 of the bounding-box diagonal | longest element edge (scene units) |
 //! | `iteration` | `gauss-seidel` | `jacobi`, `gauss-seidel` or `conjugate-gradient` |
 //! | `tolerance` | 1e-4 | target relative error of B (area-weighted L1) |
 //! | `max_iterations` | 100000 | cap on iterations |

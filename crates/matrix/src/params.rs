@@ -41,8 +41,8 @@ pub const MAX_QUADRATURE: u32 = 16;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct MatrixParams {
-    /// Longest element edge in scene units; unset: 1/20 of the scene's bounding-box diagonal
-    /// (`radlab_answer::default_element_size`, about 1,000 elements in the Cornell box).
+    /// Longest element edge in scene units; unset: 1/25 of the scene's bounding-box diagonal
+    /// (`radlab_answer::default_element_size`, about 1,700 elements in the Cornell box).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,
     /// The iterative solver of (I − ρF) B = E: jacobi, gauss-seidel or conjugate-gradient.

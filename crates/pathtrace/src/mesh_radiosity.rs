@@ -82,7 +82,7 @@ pub enum McMethod {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct McRadiosityParams {
-    /// Element edge length in scene units; unset: 1/20 of the scene's bounding diagonal, as for matrix.
+    /// Element edge length in scene units; unset: 1/25 of the scene's bounding diagonal, as for matrix.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,

@@ -44,7 +44,7 @@ pub enum Overshoot {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ProgressiveParams {
-    /// Receiving element size (longest edge, scene units); unset: 1/20 of the scene's bounding diagonal.
+    /// Receiving element size (longest edge, scene units); unset: 1/25 of the scene's bounding diagonal.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,
     /// Shooting patch size (scene units), at least element_size; equal to it turns substructuring off; unset:

@@ -408,6 +408,13 @@ fn config_errors_name_the_key() {
             TINY.replace("samples = 64", "samples = \"many\""),
             "samples",
         ),
+        (
+            TINY.replace(
+                "label = \"cornell\"",
+                "label = \"cornell\"\nreference_samples = 1",
+            ),
+            "reference_samples",
+        ),
     ];
     for (body, needle) in cases {
         let cfg = write_config(tmp.path(), "bad.toml", &body);
@@ -531,4 +538,67 @@ params = {{ initial_samples = 64, samples = 64 }}
         "seeds 1 and 2 give the same estimates: {l1:?}"
     );
     assert!(l1.iter().all(|&e| e > 0.0), "{l1:?}");
+}
+
+#[test]
+fn a_scene_s_reference_samples_override_the_experiment_s() {
+    // The same scene twice, once at the experiment's 16 reference samples and once at its own 1,024: the
+    // second reference's standard errors are about √64 = 8 times smaller at the same points.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let cfg = write_config(
+        tmp.path(),
+        "refs.toml",
+        r#"
+name = "refs"
+seeds = [1]
+[evaluation]
+points = 24
+[reference]
+samples = 16
+[outputs]
+images = false
+plots = false
+[[scenes]]
+scene = "builtin:cornell"
+label = "coarse"
+[[scenes]]
+scene = "builtin:cornell"
+label = "fine"
+reference_samples = 1024
+[[methods]]
+method = "matrix"
+params = { visibility = "centre", quadrature = 1, reconstruction = "constant" }
+"#,
+    );
+    let out = tmp.path().join("out");
+    run_ok(tmp.path(), &cfg, &out);
+    let se_sum = |scene: &str| -> f64 {
+        let runs = std::fs::read_dir(out.join("runs")).expect("runs dir");
+        let path = runs
+            .map(|e| e.expect("entry").path())
+            .find(|p| {
+                let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+                name.contains(scene) && name.ends_with(".points.csv")
+            })
+            .expect("a points file");
+        let mut r = csv::Reader::from_path(&path).expect("csv");
+        let h = r.headers().expect("header").clone();
+        let cols: Vec<usize> = ["se_r", "se_g", "se_b"]
+            .iter()
+            .map(|c| h.iter().position(|x| x == *c).expect("se column"))
+            .collect();
+        r.records()
+            .map(|x| x.expect("row"))
+            .map(|row| {
+                cols.iter()
+                    .map(|&c| row[c].parse::<f64>().expect("se"))
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    let ratio = se_sum("coarse") / se_sum("fine");
+    assert!(
+        (5.0..12.0).contains(&ratio),
+        "standard errors at 16 and 1,024 samples differ by {ratio}, not about 8"
+    );
 }

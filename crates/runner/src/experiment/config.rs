@@ -196,6 +196,11 @@ pub struct SceneEntry {
     /// Reference kind for this scene (overrides `[reference] kind`).
     #[serde(default)]
     pub reference: Option<ReferenceKind>,
+    /// Path-traced reference samples per point for this scene (overrides `[reference] samples`): a scene
+    /// whose darkest points need a smaller standard error than the others (the max error divides by the
+    /// reference there) buys it alone.
+    #[serde(default)]
+    pub reference_samples: Option<u32>,
     /// Scaling family: scenes of one family form a series against their face count in the scaling plots.
     #[serde(default)]
     pub family: Option<String>,
@@ -227,6 +232,14 @@ impl MethodEntry {
 }
 
 impl SceneEntry {
+    /// The reference settings of this scene: `reference`, with this scene's samples where it sets them.
+    pub fn reference_config(&self, reference: &ReferenceConfig) -> ReferenceConfig {
+        ReferenceConfig {
+            samples: self.reference_samples.unwrap_or(reference.samples),
+            ..reference.clone()
+        }
+    }
+
     /// The label.
     pub fn label(&self) -> String {
         self.label
@@ -402,6 +415,14 @@ impl ExperimentConfig {
             bail!(
                 "reference.samples and reference.image_spp: must be at least 2 (a standard error needs two samples)"
             );
+        }
+        for entry in &self.scenes {
+            if entry.reference_samples.is_some_and(|n| n < 2) {
+                bail!(
+                    "scenes '{}': reference_samples must be at least 2 (a standard error needs two samples)",
+                    entry.label()
+                );
+            }
         }
         let l = &self.limits;
         if !(l.time_limit > 0.0 && l.time_limit.is_finite()) {

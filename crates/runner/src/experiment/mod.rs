@@ -142,7 +142,7 @@ pub fn run(args: &RunArgs, threads: Option<usize>) -> Result<()> {
             &scene_digest,
             &accel,
             &points,
-            &cfg.reference,
+            &entry.reference_config(&cfg.reference),
             kind,
             &refs_dir,
             &|d, _| bar.set_position(d as u64),
