@@ -247,7 +247,7 @@ impl ClusterGather {
                 let leaves = patches[&f]
                     .iter()
                     .map(|l| ElementValue {
-                        radiosity: first.radiosity_at(ctx, accel, f, l.polygon.centroid()),
+                        radiosity: first.radiosity_at(ctx, accel, f, l.polygon.centroid(), false),
                         ..*l
                     })
                     .collect();
@@ -259,7 +259,7 @@ impl ClusterGather {
             .into_par_iter()
             .map(|f| match patches.get(&f) {
                 Some(leaves) => area_mean(leaves),
-                None => first.radiosity_at(ctx, accel, f, scene.faces[f].centroid),
+                None => first.radiosity_at(ctx, accel, f, scene.faces[f].centroid, false),
             })
             .collect();
         let gather = Self::new(ctx, values, patches, opening, seed);
@@ -302,22 +302,27 @@ impl ClusterGather {
         accel: &Accel,
         face: FaceId,
         point: DVec3,
+        in_gap: bool,
     ) -> Rgb {
         let scene = ctx.scene;
         let (rho, e) = (scene.reflectance(face), scene.emission(face));
         if rho.max_element() <= 0.0 {
             return e;
         }
-        e + rho * self.irradiance_at(ctx, accel, face, point)
+        e + rho * self.irradiance_at(ctx, accel, face, point, in_gap)
     }
 
-    /// Σ_j F V B_j at `point` on `face`: what [`ClusterGather::radiosity_at`] multiplies by ρ.
+    /// Σ_j F V B_j at `point` on `face`: what [`ClusterGather::radiosity_at`] multiplies by ρ. `in_gap`: the
+    /// point lies in or beside a gap (its seal test found it open only after a closed ray), and every node is
+    /// opened and every face's visible share measured by the kernel-weighted `direct` rays (module
+    /// documentation).
     pub fn irradiance_at(
         &self,
         ctx: &FaceContext<'_>,
         accel: &Accel,
         face: FaceId,
         point: DVec3,
+        in_gap: bool,
     ) -> Rgb {
         let (tree, scene, centroid) = (&ctx.tree, ctx.scene, &ctx.centroid);
         let n = scene.faces[face].normal;
@@ -339,9 +344,7 @@ impl ClusterGather {
                     sum += self.gather_face(
                         scene,
                         accel,
-                        face,
-                        point,
-                        n,
+                        (face, point, n, in_gap),
                         key,
                         f,
                         &mut rays,
@@ -352,7 +355,7 @@ impl ClusterGather {
             }
             let to_x = point - s.centre;
             let dist = to_x.length();
-            if self.emits[m] || !(s.radius < self.opening * dist) {
+            if self.emits[m] || in_gap || !(s.radius < self.opening * dist) {
                 stack.extend(node.children());
                 continue;
             }
@@ -397,9 +400,7 @@ impl ClusterGather {
         &self,
         scene: &Scene,
         accel: &Accel,
-        face: FaceId,
-        point: DVec3,
-        n: DVec3,
+        (face, point, n, in_gap): (FaceId, DVec3, DVec3, bool),
         key: u64,
         f: FaceId,
         rays: &mut u64,
@@ -415,9 +416,18 @@ impl ClusterGather {
             if !(ff > 0.0) {
                 return Rgb::ZERO;
             }
-            let v = if emits && self.kernel_weighted_emitters {
+            let v = if in_gap || (emits && self.kernel_weighted_emitters) {
                 self.settings.kernel_weighted_share(
-                    accel, face, point, n, key, stream, el, emits, rays, kernels,
+                    accel,
+                    face,
+                    point,
+                    n,
+                    key,
+                    stream,
+                    el,
+                    emits || in_gap,
+                    rays,
+                    kernels,
                 )
             } else {
                 self.settings
@@ -471,7 +481,8 @@ pub struct TreeFarField<'g, 'a> {
 
 impl FarField for TreeFarField<'_, '_> {
     fn irradiance(&self, face: FaceId, point: DVec3) -> Rgb {
-        self.gather.irradiance_at(self.ctx, self.accel, face, point)
+        self.gather
+            .irradiance_at(self.ctx, self.accel, face, point, false)
     }
 }
 

@@ -680,7 +680,7 @@ impl Solution for FaceClusterSolver<'_> {
             return self.near_field_answer(face, point);
         }
         let key = point_key(face, point);
-        if point_sealed(
+        let (sealed, seal_rays) = point_sealed(
             self.scene,
             self.accel,
             face,
@@ -688,15 +688,19 @@ impl Solution for FaceClusterSolver<'_> {
             POINT_SEAL_RAYS,
             self.seed,
             key,
-        )
-        .0
-        {
+        );
+        if sealed {
             return self.scene.emission(face);
         }
         if let Some(opening) = self.gather_opening {
-            return self
-                .cluster_gather(opening)
-                .radiosity_at(&self.ctx, self.accel, face, point);
+            // Open only after a closed ray: the point lies in or beside a gap.
+            return self.cluster_gather(opening).radiosity_at(
+                &self.ctx,
+                self.accel,
+                face,
+                point,
+                seal_rays > 1,
+            );
         }
         if self.gouraud
             && self

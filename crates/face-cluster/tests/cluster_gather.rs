@@ -85,8 +85,8 @@ fn a_far_plate_is_gathered_whole_within_its_point_transfer_error() {
             .expect("a bottom face");
         let want = 0.5 * to_rectangle(x, y, 1.0, 1.0, h);
         let (k0, k1) = (exact.kernel_evaluations(), whole.kernel_evaluations());
-        let b0 = exact.radiosity_at(&ctx, &accel, f, p).x;
-        let b1 = whole.radiosity_at(&ctx, &accel, f, p).x;
+        let b0 = exact.radiosity_at(&ctx, &accel, f, p, false).x;
+        let b1 = whole.radiosity_at(&ctx, &accel, f, p, false).x;
         assert!(
             (b0 - want).abs() <= 1e-12 * want,
             "({x}, {y}): {b0} vs {want}"
@@ -119,7 +119,9 @@ fn a_closed_sphere_fills_the_hemisphere() {
     for (opening, tol) in [(0.0, 1e-9), (DEFAULT_OPENING, 0.01)] {
         let g = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), opening, 5);
         for f in (0..scene.face_count()).step_by(32) {
-            let b = g.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid).x;
+            let b = g
+                .radiosity_at(&ctx, &accel, f, scene.faces[f].centroid, false)
+                .x;
             let irradiance = b / 0.5;
             assert!(
                 (irradiance - 1.0).abs() <= tol,
@@ -150,7 +152,7 @@ fn gathered_values_are_one_jacobi_iteration_and_their_work_is_counted() {
     let ones = vec![Rgb::ONE; scene.face_count()];
     let once = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5);
     for f in 0..scene.face_count() {
-        once.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid);
+        once.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid, false);
     }
     let (values_work, values_rays) = (once.kernel_evaluations(), once.rays());
     let twice = ClusterGather::regathered(&ctx, &accel, ones, HashMap::new(), (0.0, 0.0), 5);
@@ -159,8 +161,8 @@ fn gathered_values_are_one_jacobi_iteration_and_their_work_is_counted() {
     for f in (0..scene.face_count()).step_by(17) {
         let x = scene.faces[f].centroid;
         let (b1, b2) = (
-            once.radiosity_at(&ctx, &accel, f, x).x,
-            twice.radiosity_at(&ctx, &accel, f, x).x,
+            once.radiosity_at(&ctx, &accel, f, x, false).x,
+            twice.radiosity_at(&ctx, &accel, f, x, false).x,
         );
         assert!((b1 - 1.5).abs() <= 1e-9, "face {f}: one gather {b1}");
         assert!((b2 - 1.75).abs() <= 1e-9, "face {f}: two gathers {b2}");
@@ -235,7 +237,7 @@ fn work_per_query_grows_far_slower_than_the_faces() {
         );
         let queries: Vec<usize> = (0..64).map(|i| i * scene.face_count() / 64).collect();
         for &f in &queries {
-            g.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid);
+            g.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid, false);
         }
         g.kernel_evaluations() as f64 / queries.len() as f64
     };
