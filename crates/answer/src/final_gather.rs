@@ -930,7 +930,7 @@ mod tests {
         // edge rises at 1 mm per 4 mm, so of the wall at x = 6.496 only the part below 1.5 is seen, and it
         // is seen at grazing angles: ∫V k / ∫k ≈ 0.59 (1.5² / 2² = 0.5625 were the kernel proportional to the
         // height).
-        // The wall's centroid, 1 up, is in view: one ray to it counted the wall whole (+78%).
+        // The wall's centroid, 1 up, is in view: one ray to it counted the wall whole (+70%).
         let mut b = SceneBuilder::new("slit");
         let grey = material(&mut b, "grey", 0.5, 0.0);
         grid(&mut b, DVec3::ZERO, 2.0 * DVec3::X, 2.0 * DVec3::Y, 1, grey);

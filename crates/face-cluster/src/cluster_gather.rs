@@ -26,6 +26,9 @@
 //! turned toward x are both the better seen and the brighter in x's kernel; a sample drawn evenly among those
 //! facing x gave the mean visibility without that covariance, and the tree gather read low (measured on the
 //! 10⁵-face terrain at opening 0.1, ε = 1e-5: signed −0.040%, L1 0.070%; kernel-weighted −0.015%, 0.059%).
+//! A query point beside a gap (its seal test open only after a closed ray; the caller says so) opens every
+//! node and measures every face's visible share with the 16 kernel-weighted rays: light reaches it through a
+//! slit, which one ray per node or face finds or misses whole (radlab-answer's final gather does the same).
 //! At θ = 0 every node is opened and the gather is the flat one over every face; the error of a far node's point transfer is of order θ², and the number of
 //! nodes a query opens grows as log k for a surface seen from a point on it, so the cost per query is
 //! sub-linear in k where the flat gather's is linear.

@@ -44,8 +44,10 @@
 //! 128; an open point usually pays one ray, charged to answering as the runner counts the accelerator's
 //! rays), and a point whose every ray meets the back of a face, or the front of one whose plane passes
 //! within that gap (a block's bottom face just above the floor), answers its emission E: one-sided faces
-//! absorb at their backs, so it receives nothing, and light reaches a gap only through its mouth. The
-//! solution itself (and its energy) is unchanged.
+//! absorb at their backs, so it receives nothing, and light reaches a gap only through its mouth. A point
+//! found open only after a closed ray lies beside such a gap, and the tree gather answers it with every node
+//! opened and kernel-weighted rays ([`crate::cluster_gather`]). The solution itself (and its energy) is
+//! unchanged.
 
 use std::sync::{Arc, OnceLock};
 
