@@ -78,7 +78,8 @@
 //! not a pass over every source.
 //!
 //! Cost per query: the seal test's rays (one for most open points), one kernel evaluation per source element
-//! in front of the point and 16 per near source, plus their rays; the first time an element is near some
+//! in front of the point and 16 per near source, plus their rays (a point beside a gap: 16 rays and 16 more
+//! kernel evaluations per far source); the first time an element is near some
 //! query, one gather at its centroid and 64 evaluations per member of its near set, with their rays (and for
 //! an element with a sealed part, its 64 quarters' seal tests). All are counted in
 //! [`FinalGather::rays`] and [`FinalGather::kernel_evaluations`] so the method answering can charge them.
