@@ -878,6 +878,18 @@ mod tests {
         }
     }
 
+    /// A grey floor (face 0, [0, 2]², facing up) and a grey panel 1 mm over it facing down, over x < 0.5
+    /// (face 1): the builder, to add to, and the grey material.
+    fn panel_over_a_floor() -> (radlab_scene::SceneBuilder, u32) {
+        use radlab_testkit::{grid, material};
+        let mut b = radlab_scene::SceneBuilder::new("panel over a floor");
+        let grey = material(&mut b, "grey", 0.5, 0.0);
+        grid(&mut b, DVec3::ZERO, 2.0 * DVec3::X, 2.0 * DVec3::Y, 1, grey);
+        let corner = dvec3(-1.0, 0.0, 1e-3);
+        grid(&mut b, corner, 2.0 * DVec3::Y, 1.5 * DVec3::X, 1, grey);
+        (b, grey)
+    }
+
     /// A point in a gap under a face that faces it (a cube's bottom face a millimetre above a floor) receives
     /// nothing, whatever radiosity that face's element holds: an element straddling a gap's mouth holds the
     /// light of its open part, and gathering it there carried that light into the gap (the furnished room's
@@ -885,14 +897,8 @@ mod tests {
     /// gathers.
     #[test]
     fn a_point_in_a_gap_answers_its_emission_whatever_the_face_over_it_holds() {
-        use radlab_scene::SceneBuilder;
-        use radlab_testkit::{grid, material};
-        let mut b = SceneBuilder::new("panel over a floor");
-        let grey = material(&mut b, "grey", 0.5, 0.0);
-        grid(&mut b, DVec3::ZERO, 2.0 * DVec3::X, 2.0 * DVec3::Y, 1, grey);
-        // Facing down, 1 mm up, over x < 0.5: a third of the seal gap (1e-3 of the diagonal, 3.6 mm).
-        let corner = dvec3(-1.0, 0.0, 1e-3);
-        grid(&mut b, corner, 2.0 * DVec3::Y, 1.5 * DVec3::X, 1, grey);
+        // The panel 1 mm up is a third of the seal gap (1e-3 of the diagonal, 3.6 mm).
+        let (b, _) = panel_over_a_floor();
         let scene = b.build().expect("scene");
         assert!(scene.faces[1].normal.z < 0.0);
         let accel = Accel::new(&scene);
@@ -913,18 +919,9 @@ mod tests {
         assert!(beside.min_element() > 0.0, "{beside}");
     }
 
-    /// A source with a sealed part is gathered through its near field too. A block stands on a floor that is
-    /// one element (1 m; its near field's quarters are 12.5 cm), lit from beside the block, so the floor in
-    /// front of the block's far side lies in its shadow; the element holds its open part's mean (B_j, brightest
-    /// under the light). Points on that side 20 and 25 cm above the floor see mostly the shadowed strip.
-    /// Against a brute-force integral over 1 cm cells of the floor (each cell's exact factor, the floor's
-    /// direct radiosity at its centre from 16 rays to the light), the near field's errors at six such points
-    /// sum to under a third of those of gathering the element whole at B_j, as sources with a sealed part
-    /// were gathered before (0.23 of them, measured).
     #[test]
     fn a_point_beside_a_slit_sees_a_source_through_it_by_its_kernel_not_its_centroid() {
-        use radlab_scene::SceneBuilder;
-        use radlab_testkit::{grid, material};
+        use radlab_testkit::grid;
         use std::f64::consts::PI;
         // A floor (face 0), a panel 1 mm over it facing down over x < 0.5 (face 1), and a far wall (face 2)
         // 2 high, facing the point. From (0.496, 1, 0), 4 mm inside the panel's edge, the slit under the
@@ -932,17 +929,7 @@ mod tests {
         // is seen at grazing angles: ∫V k / ∫k ≈ 0.59 (1.5² / 2² = 0.5625 were the kernel proportional to the
         // height).
         // The wall's centroid, 1 up, is in view: one ray to it counted the wall whole (+70%).
-        let mut b = SceneBuilder::new("slit");
-        let grey = material(&mut b, "grey", 0.5, 0.0);
-        grid(&mut b, DVec3::ZERO, 2.0 * DVec3::X, 2.0 * DVec3::Y, 1, grey);
-        grid(
-            &mut b,
-            dvec3(-1.0, 0.0, 1e-3),
-            2.0 * DVec3::Y,
-            1.5 * DVec3::X,
-            1,
-            grey,
-        );
+        let (mut b, grey) = panel_over_a_floor();
         let x_wall = 6.496;
         grid(
             &mut b,
@@ -995,6 +982,14 @@ mod tests {
         );
     }
 
+    /// A source with a sealed part is gathered through its near field too. A block stands on a floor that is
+    /// one element (1 m; its near field's quarters are 12.5 cm), lit from beside the block, so the floor in
+    /// front of the block's far side lies in its shadow; the element holds its open part's mean (B_j, brightest
+    /// under the light). Points on that side 20 and 25 cm above the floor see mostly the shadowed strip.
+    /// Against a brute-force integral over 1 cm cells of the floor (each cell's exact factor, the floor's
+    /// direct radiosity at its centre from 16 rays to the light), the near field's errors at six such points
+    /// sum to under a third of those of gathering the element whole at B_j, as sources with a sealed part
+    /// were gathered before (0.23 of them, measured).
     #[test]
     fn a_source_with_a_sealed_part_resolves_its_shadow_in_the_near_field() {
         use radlab_scene::SceneBuilder;

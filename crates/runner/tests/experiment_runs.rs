@@ -431,14 +431,18 @@ fn config_errors_name_the_key() {
     assert!(!o.status.success() && text(&o).contains("missing.toml"));
 }
 
+/// A CSV file's rows, and the index of each named column.
+fn table<const N: usize>(path: &Path, names: [&str; N]) -> (Vec<csv::StringRecord>, [usize; N]) {
+    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let h = r.headers().expect("header").clone();
+    let cols = names.map(|n| h.iter().position(|x| x == n).expect(n));
+    (r.records().map(|x| x.expect("row")).collect(), cols)
+}
+
 /// Rows of a scene's trace as (step, l1) pairs.
 fn trace_l1(out: &Path, scene: &str) -> Vec<(u64, f64)> {
-    let mut r = csv::Reader::from_path(out.join("trace.csv")).expect("trace.csv");
-    let h = r.headers().expect("header").clone();
-    let col = |n: &str| h.iter().position(|x| x == n).expect(n);
-    let (sc, step, l1) = (col("scene"), col("step"), col("l1"));
-    r.records()
-        .map(|x| x.expect("row"))
+    let (rows, [sc, step, l1]) = table(&out.join("trace.csv"), ["scene", "step", "l1"]);
+    rows.iter()
         .filter(|x| &x[sc] == scene)
         .map(|x| (x[step].parse().expect("step"), x[l1].parse().expect("l1")))
         .collect()
@@ -581,14 +585,8 @@ params = { visibility = "centre", quadrature = 1, reconstruction = "constant" }
                 name.contains(scene) && name.ends_with(".points.csv")
             })
             .expect("a points file");
-        let mut r = csv::Reader::from_path(&path).expect("csv");
-        let h = r.headers().expect("header").clone();
-        let cols: Vec<usize> = ["se_r", "se_g", "se_b"]
-            .iter()
-            .map(|c| h.iter().position(|x| x == *c).expect("se column"))
-            .collect();
-        r.records()
-            .map(|x| x.expect("row"))
+        let (rows, cols) = table(&path, ["se_r", "se_g", "se_b"]);
+        rows.iter()
             .map(|row| {
                 cols.iter()
                     .map(|&c| row[c].parse::<f64>().expect("se"))
