@@ -344,6 +344,7 @@ impl<'a> FaceClusterSolver<'a> {
         }
         let ctx = Arc::new(ctx);
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather)
+            .with_leaf_visibility(p.leaf_visibility)
             .with_open_shares(scene);
         let transport = VectorTransport::new(
             patches,

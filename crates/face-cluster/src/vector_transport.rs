@@ -624,6 +624,11 @@ impl<'a> Transport<FaceNode<'a>> for VectorTransport<'a> {
         }
     }
 
+    fn own_visibility(&self, target: &FaceNode<'a>, src: &FaceNode<'a>, link: &Link) -> bool {
+        matches!((target, src), (FaceNode::Patch(_), FaceNode::Patch(_)))
+            && self.patches.patch_own_visibility(link)
+    }
+
     fn coefficient(
         &self,
         target: &FaceNode<'a>,

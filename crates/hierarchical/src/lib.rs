@@ -21,6 +21,7 @@
 //! | `lazy_linking` | true | interleaved/scheduled: link from a face only once it carries light |
 //! | `min_element_size` | diagonal/150 | no element is split into children shorter than this |
 //! | `visibility` | `jittered4x4` | rays per link: `unoccluded`, `centre` (1), `jittered2x2`, `jittered4x4` (16), `jittered8x8`; area-sampled settings also give each leaf its open share (128 rays per leaf) |
+//! | `leaf_visibility` | `jittered2x2` | gather = leaf: a leaf below a partly visible link's receiver casts its own rays to the source (`centre`, `jittered2x2`, `jittered4x4`) or takes the link's fraction (`link`) |
 //! | `quadrature` | 2 | Gauss points per side of the receiver quadrature |
 //! | `tolerance` | 1e-4 | estimated relative error at which solving stops |
 //! | `max_steps` | 100000 | hard stop, reported as `Step::Capped` (a cap, not a convergence) |
@@ -144,8 +145,8 @@ pub use node::{Bound, LATTICE, MAX_LEVEL, NodeKind, Patch};
 pub use oracle::{Action, decide, estimate, light_weight};
 pub use output::SurfaceOutput;
 pub use params::{
-    DEFAULT_RECONSTRUCTION, ErrorNorm, Gather, HierarchicalParams, MIN_ELEMENT_SIZE_REL, Oracle,
-    Schedule,
+    DEFAULT_RECONSTRUCTION, ErrorNorm, Gather, HierarchicalParams, LeafVisibility,
+    MIN_ELEMENT_SIZE_REL, Oracle, Schedule,
 };
 pub use patch_transport::{PatchKernel, reflect_scalar};
 pub use push_pull::LinkFilter;

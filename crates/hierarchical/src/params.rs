@@ -63,6 +63,42 @@ pub enum Gather {
     Link,
 }
 
+/// Where a leaf below a partly visible link's receiver takes its visibility from (gather = leaf). A
+/// coarse link has one visibility fraction V_rs for its whole receiver; a leaf of it that lies in the shadow of
+/// an occluder near the receiver (the floor beside a block, which hides part of a wall behind it) would gather
+/// V_rs F_{leaf→s} of the source's light, and one in full view the same share: the shadow is spread over the
+/// receiver. With rays, each such leaf measures its own visibility of the source, V_{leaf,s} F_{leaf→s}
+/// (Hanrahan, Salzman & Aupperle 1991 estimate visibility per link; this estimates it per leaf-source pair, as
+/// the gather evaluates the kernel there). Links that are wholly visible or wholly hidden (V_rs = 1 or 0) keep
+/// their fraction, so a scene without shadows casts no more rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum LeafVisibility {
+    /// Every leaf takes its link's fraction V_rs (HSA91).
+    Link,
+    /// One ray, between the centroids.
+    Centre,
+    /// 2 × 2 jittered rays between the leaf and the source: the default. On the Cornell box it took the
+    /// hierarchical method's worst point from 43% to 13% for about 10% more time (docs/defaults.md); one
+    /// centre ray biased the mean by −0.42%, against −0.14% with these.
+    #[default]
+    Jittered2x2,
+    /// 4 × 4 jittered rays.
+    Jittered4x4,
+}
+
+impl LeafVisibility {
+    /// The ray sampling of a leaf's own visibility, `None` for the link's fraction.
+    pub fn sampling(self) -> Option<VisibilitySampling> {
+        match self {
+            Self::Link => None,
+            Self::Centre => Some(VisibilitySampling::Centre),
+            Self::Jittered2x2 => Some(VisibilitySampling::Jittered2x2),
+            Self::Jittered4x4 => Some(VisibilitySampling::Jittered4x4),
+        }
+    }
+}
+
 /// What the refinement threshold ε bounds (RenderPark's "error norm"; Smits, Arvo & Greenberg 1994 bound the
 /// power a link carries).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
@@ -113,6 +149,9 @@ pub struct HierarchicalParams {
     pub min_element_size: Option<f64>,
     /// Visibility rays per link.
     pub visibility: VisibilitySampling,
+    /// Gather = leaf: where a leaf below a partly visible link's receiver takes its visibility from: link
+    /// (the link's fraction) or its own rays to the source (centre, jittered2x2, jittered4x4).
+    pub leaf_visibility: LeafVisibility,
     /// Gauss–Legendre points per side (m, m² points) of the receiver quadrature of the point-to-polygon
     /// kernel.
     #[schemars(range(min = 1, max = 8))]
@@ -158,6 +197,7 @@ impl HierarchicalParams {
             lazy_linking: true,
             min_element_size: None,
             visibility: VisibilitySampling::Jittered4x4,
+            leaf_visibility: LeafVisibility::Jittered2x2,
             quadrature: 2,
             tolerance: 1e-4,
             max_steps: 100_000,
@@ -176,11 +216,13 @@ impl HierarchicalParams {
         p
     }
 
-    /// A careful solution for reference tables: ε = 0.002, 8×8 rays, 3×3 quadrature, tolerance 1e-5.
+    /// A careful solution for reference tables: ε = 0.002, 8×8 rays per link and 4×4 per leaf, 3×3 quadrature,
+    /// tolerance 1e-5.
     pub const fn reference() -> Self {
         let mut p = Self::default_params();
         p.epsilon = 0.002;
         p.visibility = VisibilitySampling::Jittered8x8;
+        p.leaf_visibility = LeafVisibility::Jittered4x4;
         p.quadrature = 3;
         p.tolerance = 1e-5;
         p
@@ -250,6 +292,7 @@ mod tests {
             ("min_element_size", "0.5"),
             ("reconstruction", "gouraud"),
             ("visibility", "centre"),
+            ("leaf_visibility", "link"),
         ]
         .map(|(k, v)| (k.to_string(), v.to_string()));
         let p = HierarchicalParams::from_pairs(&pairs).expect("valid pairs");
@@ -258,6 +301,8 @@ mod tests {
         assert_eq!(p.min_element_size, Some(0.5));
         assert_eq!(p.reconstruction, Reconstruction::Gouraud);
         assert_eq!(p.visibility, VisibilitySampling::Centre);
+        assert_eq!(p.leaf_visibility, LeafVisibility::Link);
+        assert_eq!(p.leaf_visibility.sampling(), None);
     }
 
     #[test]

@@ -12,6 +12,11 @@
 //! between the two (1, 4, 16 or 64 rays; Wallace, Elmquist & Haines 1989 split kernel and visibility the same
 //! way). Each link also keeps what the refinement oracles read ([`crate::Link`]).
 //!
+//! A leaf below a link's receiver (gather = leaf) re-integrates the kernel over itself, F_{leaf→s}, and, where
+//! the link is partly visible (0 < V_rs < 1), measures its own visibility V_{leaf,s} with rays between the
+//! leaf and the source ([`crate::LeafVisibility`]): the link's one fraction would spread a shadow cast near the
+//! receiver over all of it.
+//!
 //! Where a link's source is an inner node, what it sends is the mean of its leaves' radiosity weighted by how
 //! much each sees the receiver, w_y = A_y F_{y→r} by y's own Gauss points ([`PatchKernel::source_weight`];
 //! the crate's `gather_rows` module), and a leaf reflects B = E + ρ H ([`reflect_scalar`]).
@@ -27,7 +32,7 @@ use radlab_scene::{Rgb, Scene};
 
 use crate::link::{Link, link_stream};
 use crate::node::{NodeKind, Patch};
-use crate::params::Gather;
+use crate::params::{Gather, LeafVisibility};
 use crate::transport::{GatherAt, NodeView, Transport};
 
 /// Mean of the point-to-polygon factor F_{dA(x)→src} over `recv`'s m × m Gauss points x: `recv`'s
@@ -48,6 +53,8 @@ pub struct PatchKernel<'a> {
     visibility: VisibilitySampling,
     seed: u64,
     gather: Gather,
+    /// Rays of a leaf's own visibility below a partly visible link's receiver; `None`: the link's fraction.
+    leaf_visibility: Option<VisibilitySampling>,
     /// The scene whose leaves' open shares are estimated ([`PatchKernel::with_open_shares`]), if any.
     open_shares: Option<&'a Scene>,
 }
@@ -67,8 +74,16 @@ impl<'a> PatchKernel<'a> {
             visibility,
             seed,
             gather,
+            leaf_visibility: None,
             open_shares: None,
         }
+    }
+
+    /// The same kernel giving each leaf below a partly visible link's receiver its own visibility of the
+    /// link's source ([`crate::LeafVisibility`]).
+    pub fn with_leaf_visibility(mut self, leaf: LeafVisibility) -> Self {
+        self.leaf_visibility = leaf.sampling();
+        self
     }
 
     /// The same kernel estimating every leaf's open share in `scene` (the scene `accel` was built from):
@@ -187,7 +202,8 @@ impl PatchKernel<'_> {
     }
 
     /// The coefficient of a patch link at `target`: the link's own at its receiver, else the kernel
-    /// re-integrated over the target with the link's visibility.
+    /// re-integrated over the target with the link's visibility, or, where that is partial and leaves cast
+    /// their own rays, the target's visibility of the source.
     pub fn patch_coefficient(
         &self,
         target: &Patch,
@@ -196,10 +212,46 @@ impl PatchKernel<'_> {
         at_receiver: bool,
     ) -> f64 {
         if at_receiver {
-            link.coefficient
-        } else {
-            link.visibility as f64 * self.kernel_mean(target, src)
+            return link.coefficient;
         }
+        let v = link.visibility as f64;
+        let v = match self.leaf_visibility {
+            Some(sampling) if v > 0.0 && v < 1.0 => {
+                // Ordered by key as a link's rays are, so that a leaf-to-source pair casts the rays a link
+                // between the two would.
+                let (kt, ks) = (target.key(), src.key());
+                let (a, b) = if kt <= ks {
+                    (target, src)
+                } else {
+                    (src, target)
+                };
+                let own = visibility_fraction(
+                    self.accel,
+                    &a.polygon,
+                    a.face,
+                    &b.polygon,
+                    b.face,
+                    sampling,
+                    self.seed,
+                    link_stream(kt, ks),
+                );
+                if own.is_nan() { v } else { own }
+            }
+            _ => v,
+        };
+        v * self.kernel_mean(target, src)
+    }
+
+    /// Whether a patch link's coefficient at a target below its receiver measures the target's own
+    /// visibility ([`crate::Transport::own_visibility`]): leaf visibility on, gathered at leaves, and the
+    /// link partly visible. (A target that is the receiver itself takes the link's coefficient, whose rays
+    /// start on it too.)
+    pub fn patch_own_visibility(&self, link: &Link) -> bool {
+        self.leaf_visibility.is_some()
+            && self.gather == Gather::Leaf
+            && !link.clustered
+            && link.visibility > 0.0
+            && link.visibility < 1.0
     }
 
     /// Where a patch link is gathered, by the [`Gather`] parameter.
@@ -272,6 +324,10 @@ impl Transport<Patch> for PatchKernel<'_> {
         Some(o)
     }
 
+    fn own_visibility(&self, _target: &Patch, _src: &Patch, link: &Link) -> bool {
+        self.patch_own_visibility(link)
+    }
+
     fn coefficient_weight(&self, c: &f64) -> f64 {
         *c
     }
@@ -293,5 +349,79 @@ impl Transport<Patch> for PatchKernel<'_> {
 
     fn unit_response(&self, _leaf: &Patch) -> Option<(Rgb, ())> {
         Some((Rgb::ONE, ()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DVec3, dvec3};
+    use radlab_scene::SceneBuilder;
+    use radlab_testkit::{grid, material};
+
+    /// A unit floor (y = 0, facing up) under a unit emitter (y = 1, facing down), and a panel a thousandth
+    /// above the floor over its half x < 1/2, reaching far beyond it: the floor's half x < 1/2 sees nothing
+    /// of the emitter, the other half all of it (but for rays that graze the panel's edge).
+    fn half_shaded_floor() -> Scene {
+        let mut b = SceneBuilder::new("half-shaded floor");
+        let grey = material(&mut b, "grey", 0.5, 0.0);
+        let lamp = material(&mut b, "lamp", 0.0, 1.0);
+        grid(&mut b, DVec3::ZERO, DVec3::Z, DVec3::X, 1, grey);
+        grid(&mut b, dvec3(0.0, 1.0, 0.0), DVec3::X, DVec3::Z, 1, lamp);
+        grid(
+            &mut b,
+            dvec3(-50.0, 1e-3, -50.0),
+            DVec3::Z * 100.0,
+            DVec3::X * 50.5,
+            1,
+            grey,
+        );
+        b.build().expect("scene")
+    }
+
+    /// A link from the emitter to the whole floor is half visible; below it, a leaf of the floor's shaded half
+    /// takes none of the emitter's light and a leaf of its lit half all of it, as each sees the emitter, and
+    /// the leaves' coefficients add up to the link's. With the link's fraction (`link`) every leaf took half:
+    /// the panel's shadow spread over the whole floor.
+    #[test]
+    fn a_leaf_below_a_partly_visible_link_measures_its_own_visibility() {
+        let scene = half_shaded_floor();
+        let accel = Accel::new(&scene);
+        let (floor, lamp) = (Patch::root(&scene, 0), Patch::root(&scene, 1));
+        let kernel = |leaf| {
+            PatchKernel::new(&accel, 2, VisibilitySampling::Jittered4x4, 5, Gather::Leaf)
+                .with_leaf_visibility(leaf)
+        };
+        let own = kernel(LeafVisibility::Jittered2x2);
+        let link = own.patch_link(&floor, &lamp, 1).expect("link");
+        assert!((link.visibility - 0.5).abs() < 0.2, "{}", link.visibility);
+        let leaves: Vec<Patch> = floor.split().iter().flat_map(|c| c.split()).collect();
+        assert_eq!(leaves.len(), 16);
+        let (mut total, mut shaded, mut lit) = (0.0, 0, 0);
+        for leaf in &leaves {
+            let f = own.kernel_mean(leaf, &lamp);
+            let c = own.patch_coefficient(leaf, &lamp, &link, false);
+            let spread = kernel(LeafVisibility::Link).patch_coefficient(leaf, &lamp, &link, false);
+            assert!((spread - link.visibility as f64 * f).abs() < 1e-12 * f);
+            if leaf.centroid.x < 0.5 {
+                assert_eq!(c, 0.0, "shaded leaf at {}", leaf.centroid);
+                shaded += 1;
+            } else {
+                assert!(
+                    (c - f).abs() < 1e-12 * f,
+                    "lit leaf at {}: {c} of {f}",
+                    leaf.centroid
+                );
+                lit += 1;
+            }
+            total += leaf.area * c;
+        }
+        assert_eq!((shaded, lit), (8, 8));
+        // The leaves share what the link delivers, A_r V F_rs, up to its 16 rays' noise.
+        let delivered = floor.area * link.coefficient;
+        assert!(
+            (total - delivered).abs() < 0.2 * delivered,
+            "{total} {delivered}"
+        );
     }
 }

@@ -33,7 +33,7 @@ use rayon::prelude::*;
 
 use crate::hierarchy::{Engine, NONE};
 use crate::node::NodeKind;
-use crate::transport::{LinearState, LinkPayload, Transport};
+use crate::transport::{LinearState, LinkPayload, SourceFlux, Transport};
 
 /// A per-node state of the solution: radiosity (area mean) and the transport's exitance.
 pub(crate) type Field<X> = (Vec<Rgb>, Vec<X>);
@@ -130,11 +130,18 @@ impl<N: NodeKind, T: Transport<N>> Engine<N, T> {
             .cache
             .rows
             .par_iter()
-            .map(|row| {
+            .enumerate()
+            .map(|(t, row)| {
                 let mut h = T::Irradiance::default();
                 for (r, k, c) in row {
-                    self.kernel
-                        .deliver(&mut h, c, flux[*r as usize][*k as usize]);
+                    let mut f = flux[*r as usize][*k as usize];
+                    if self.solve.has_open && self.own_visibility(t, *r, *k) {
+                        // The coefficient already leaves out the target's sealed part: its open part's
+                        // irradiance is the coefficient over the target's own open share.
+                        let o = self.solve.open[t];
+                        f = f.scaled(if o > 0.0 { 1.0 / o } else { 0.0 });
+                    }
+                    self.kernel.deliver(&mut h, c, f);
                 }
                 h
             })

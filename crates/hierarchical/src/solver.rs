@@ -43,6 +43,7 @@ impl<'a> HierarchicalSolver<'a> {
             seed,
             params.gather,
         )
+        .with_leaf_visibility(params.leaf_visibility)
         .with_open_shares(scene);
         let output = SurfaceOutput::new(params.reconstruction, seed);
         let engine = Engine::new(roots, kernel, params, min_size)?;

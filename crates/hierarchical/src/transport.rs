@@ -270,6 +270,16 @@ pub trait Transport<N: NodeKind>: Sync {
         None
     }
 
+    /// Whether the coefficient of `link` at gather target `target` (from source `src`) measured the target's
+    /// own visibility of the source, with rays that start on the target (a patch link below its receiver
+    /// with [`crate::LeafVisibility`] rays): it then already leaves out the target's sealed part, and the
+    /// target's open-part irradiance is that coefficient over the target's own open share, 1/o_t, not the
+    /// link's receiver gain 1/ō_l (the crate's `open_share` module). By default false.
+    fn own_visibility(&self, target: &N, src: &N, link: &Self::Link) -> bool {
+        let _ = (target, src, link);
+        false
+    }
+
     /// The weight of a coefficient in a link's receiver-side open share ō_l = Σ o_t A_t c_t / Σ A_t c_t
     /// (the crate's `open_share` module): its magnitude (a patch: V F). By default 1 (an area-weighted share). Read
     /// only when [`Transport::open_share`] gives shares below 1.

@@ -260,6 +260,13 @@ impl<'a, M: TransferMode> Transport<ClusterNode<'a>> for ClusterTransport<'a, M>
         matches!(target, ClusterNode::Cluster(_)) && M::resolves(target, src, self.straddle_cone)
     }
 
+    fn own_visibility(&self, target: &ClusterNode<'a>, src: &ClusterNode<'a>, link: &Link) -> bool {
+        matches!(
+            (target, src),
+            (ClusterNode::Patch(_), ClusterNode::Patch(_))
+        ) && self.patches.patch_own_visibility(link)
+    }
+
     fn coefficient(
         &self,
         target: &ClusterNode<'a>,

@@ -68,6 +68,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         let p = params.engine.clone();
         let min_size = p.resolve_min_size(scene)?;
         let patches = PatchKernel::new(accel, p.quadrature, p.visibility, seed, p.gather)
+            .with_leaf_visibility(p.leaf_visibility)
             .with_open_shares(scene);
         let before = accel.rays_cast();
         let enclosures = crate::enclosure::enclosures(scene, accel, seed);

@@ -18,6 +18,7 @@
 //! | `oracle` | `bekaert-willems` | `bekaert-willems`, `f`, `bf` |
 //! | `visibility` | `per-pair` | `per-pair` (a ray per pair of quadrature nodes) or `per-link` (one fraction scaling the tensor) |
 //! | `gather` | `leaf` | `leaf` (each link's tensor re-integrated at every leaf below its receiver with the link's visibility: exact form-factor sums) or `receiver` (the classic wavelet gather, pushed down by the two-scale relation) |
+//! | `leaf_visibility` | `jittered2x2` | gather = leaf: a leaf below a partly visible link's receiver scales its tensor by its own rays' visibility of the source (`centre`, `jittered2x2`, `jittered4x4`) or by the link's (`link`); as for hierarchical radiosity |
 //! | `quadrature` | per basis | Gauss points per side (per sub-square for flatlets): haar 2, f2/f3 2, m2 3, m3 4 |
 //! | `min_element_size` | diagonal/150 | no element is split into children shorter than this |
 //! | `schedule` | `scheduled` | as for hierarchical radiosity |

@@ -3,7 +3,9 @@
 //! declared once (doc comment = help, `schemars` attribute = range, [`WaveletParams::default`] = default).
 
 use radlab_answer::Reconstruction;
-use radlab_hierarchical::{ErrorNorm, Gather, HierarchicalParams, Oracle, Schedule};
+use radlab_hierarchical::{
+    ErrorNorm, Gather, HierarchicalParams, LeafVisibility, Oracle, Schedule,
+};
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
 use schemars::JsonSchema;
@@ -55,6 +57,10 @@ pub struct WaveletParams {
     /// form-factor sums, the furnace holds at any reflectance) or receiver (pushed down by the two-scale
     /// relation; M^4 per link only).
     pub gather: WaveletGather,
+    /// Gather = leaf: where a leaf below a partly visible link's receiver takes the visibility scaling its
+    /// re-integrated tensor from: link (the link's share) or its own rays to the source (centre,
+    /// jittered2x2, jittered4x4).
+    pub leaf_visibility: LeafVisibility,
     /// Gauss points per side of each element's quadrature (per sub-square for flatlets); unset: the basis'
     /// default (haar 2, f2/f3 2 per sub-square, m2 3, m3 4). At least M for multiwavelets.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -96,6 +102,7 @@ impl Default for WaveletParams {
             oracle: WaveletOracle::BekaertWillems,
             visibility: Visibility::PerPair,
             gather: WaveletGather::Leaf,
+            leaf_visibility: LeafVisibility::Jittered2x2,
             quadrature: None,
             min_element_size: None,
             schedule: Schedule::Scheduled,

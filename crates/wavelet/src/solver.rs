@@ -82,7 +82,8 @@ fn run<'a, const K: usize>(
         params.oracle,
         params.gather,
         seed,
-    );
+    )
+    .with_leaf_visibility(params.leaf_visibility);
     // Open shares: the linked engine asks for them; linkless shooting does not estimate them.
     let transport = if params.linkless {
         transport

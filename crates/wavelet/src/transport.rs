@@ -29,6 +29,11 @@
 //! overstates the open part's variation by 1/o; a point answer inside a leaf with o < 1 first tests the
 //! point itself ([`radlab_kernels::open_fraction::point_sealed`]).
 //!
+//! Below a partly visible link's receiver, a leaf scales its re-integrated tensor by its own visibility of the
+//! source (rays between the leaf and the source, [`LeafVisibility`]; the link's one share spread the shadow of
+//! an occluder near the receiver over the whole receiver). Such a tensor already leaves out the leaf's sealed
+//! part, so the engine gains it by the leaf's own 1/o, not by the link's 1/ō_l.
+//!
 //! Refinement reads [`WaveletOracle`]: Bekaert & Willems 1996's estimate from the link's residuals at the
 //! receiver nodes with a source-side term,
 //!
@@ -43,9 +48,10 @@
 
 use glam::DVec3;
 use radlab_hierarchical::{
-    GatherAt, LinearState, LinkError, LinkPayload, NodeKind, NodeView, Oracle, Patch, SourceFlux,
-    SourceLight, Transport, link_stream,
+    GatherAt, LeafVisibility, LinearState, LinkError, LinkPayload, NodeKind, NodeView, Oracle,
+    Patch, SourceFlux, SourceLight, Transport, link_stream,
 };
+use radlab_kernels::form_factor::{VisibilitySampling, visibility_fraction};
 use radlab_kernels::open_fraction::{DEFAULT_OPEN_RAYS, point_sealed};
 use radlab_scene::sampling::mix64;
 use radlab_scene::{Rgb, Scene};
@@ -183,6 +189,8 @@ pub struct WaveletTransport<'a, const K: usize> {
     gather: WaveletGather,
     seed: u64,
     two_scale: TwoScale,
+    /// Rays of a leaf's own visibility below a partly visible link's receiver; `None`: the link's share.
+    leaf_visibility: Option<VisibilitySampling>,
     /// The scene whose leaves' open shares are estimated ([`WaveletTransport::with_open_shares`]), if any.
     open_shares: Option<&'a Scene>,
 }
@@ -211,8 +219,25 @@ impl<'a, const K: usize> WaveletTransport<'a, K> {
             gather,
             seed,
             two_scale: TwoScale::new(basis),
+            leaf_visibility: None,
             open_shares: None,
         }
+    }
+
+    /// The same transport scaling the tensor re-integrated at a leaf below a partly visible link's receiver
+    /// by the leaf's own visibility of the link's source ([`LeafVisibility`]), not the link's share.
+    pub fn with_leaf_visibility(mut self, leaf: LeafVisibility) -> Self {
+        self.leaf_visibility = leaf.sampling();
+        self
+    }
+
+    /// Whether `link`'s tensors below its receiver carry each leaf's own visibility: leaf rays on, gathered
+    /// at leaves, and the link partly visible.
+    fn leaves_see_for_themselves(&self, link: &WaveletLink<K>) -> bool {
+        self.leaf_visibility.is_some()
+            && self.gather == WaveletGather::Leaf
+            && link.visibility > 0.0
+            && link.visibility < 1.0
     }
 
     /// The same transport estimating every leaf's open share in `scene` (the scene the accelerator was built
@@ -355,7 +380,8 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
     }
 
     /// The link's own tensor at its receiver; below it, the tensor re-integrated over the target with the
-    /// link's visibility (no rays; one kernel evaluation, counted by the engine).
+    /// link's visibility (one kernel evaluation, counted by the engine), or, where that is partial and
+    /// leaves cast their own rays, the target's visibility of the source.
     fn coefficient(
         &self,
         target: &Patch,
@@ -368,12 +394,39 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
         }
         let rr = ElementRule::<K>::new(target, self.basis, self.points);
         let rs = ElementRule::<K>::new(src, self.basis, self.points);
+        let v = match self.leaf_visibility {
+            Some(sampling) if self.leaves_see_for_themselves(link) => {
+                // Ordered by key as a link's rays are.
+                let (kt, ks) = (target.key(), src.key());
+                let (a, b) = if kt <= ks {
+                    (target, src)
+                } else {
+                    (src, target)
+                };
+                let own = visibility_fraction(
+                    self.accel,
+                    &a.polygon,
+                    a.face,
+                    &b.polygon,
+                    b.face,
+                    sampling,
+                    self.seed,
+                    link_stream(kt, ks),
+                );
+                if own.is_nan() {
+                    link.visibility as f64
+                } else {
+                    own
+                }
+            }
+            _ => link.visibility as f64,
+        };
         let setup = TensorSetup {
             accel: self.accel,
             visibility: self.visibility,
             seed: self.seed,
             stream: 0,
-            given: Some(link.visibility as f64),
+            given: Some(v),
         };
         link_tensor(&setup, target, &rr, src, &rs)
             .map(|t| t.t)
@@ -418,6 +471,10 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
     }
 
     /// The mean-to-mean entry T_00 (the link's form factor at the target, V F), as a patch's V F.
+    fn own_visibility(&self, _target: &Patch, _src: &Patch, link: &Self::Link) -> bool {
+        self.leaves_see_for_themselves(link)
+    }
+
     fn coefficient_weight(&self, c: &Self::Coefficient) -> f64 {
         (c[0][0] as f64).max(0.0)
     }
