@@ -148,7 +148,7 @@ pub use params::{
     DEFAULT_RECONSTRUCTION, ErrorNorm, Gather, HierarchicalParams, LeafVisibility,
     MIN_ELEMENT_SIZE_REL, Oracle, Schedule,
 };
-pub use patch_transport::{PatchKernel, reflect_scalar};
+pub use patch_transport::{PatchKernel, pair_visibility, reflect_scalar};
 pub use push_pull::LinkFilter;
 pub use shooting::{LinkCache, SHOOT_SHARE};
 pub use solver::HierarchicalSolver;

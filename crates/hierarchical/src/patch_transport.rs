@@ -44,6 +44,30 @@ pub fn kernel_mean(recv: &Patch, src: &Patch, m: u32) -> f64 {
         .sum()
 }
 
+/// The visibility fraction between two patches by `sampling`'s rays, the ends ordered by key and the stream
+/// the pair's ([`link_stream`]), so that the pair casts the same rays whichever end receives: a link's, and a
+/// leaf's own below a link's receiver ([`crate::LeafVisibility`]). NaN where the sampling gives none.
+pub fn pair_visibility(
+    accel: &Accel,
+    x: &Patch,
+    y: &Patch,
+    sampling: VisibilitySampling,
+    seed: u64,
+) -> f64 {
+    let (kx, ky) = (x.key(), y.key());
+    let (a, b) = if kx <= ky { (x, y) } else { (y, x) };
+    visibility_fraction(
+        accel,
+        &a.polygon,
+        a.face,
+        &b.polygon,
+        b.face,
+        sampling,
+        seed,
+        link_stream(kx, ky),
+    )
+}
+
 /// The patch-to-patch transport: receiver quadrature of the point-to-polygon factor times sampled visibility;
 /// irradiance gathered per leaf ([`Gather::Leaf`]) or per link and pushed ([`Gather::Link`]).
 #[derive(Debug)]
@@ -172,19 +196,8 @@ impl PatchKernel<'_> {
             f_rs = src.area * f_sr / recv.area;
             hi = hi.max(f_rs);
         }
-        // Order the ends by key so the link and its reverse cast the same rays.
-        let (kr, ks) = (recv.key(), src.key());
-        let (a, b) = if kr <= ks { (recv, src) } else { (src, recv) };
-        let v = visibility_fraction(
-            self.accel,
-            &a.polygon,
-            a.face,
-            &b.polygon,
-            b.face,
-            self.visibility,
-            self.seed,
-            link_stream(kr, ks),
-        );
+        // The link and its reverse cast the same rays.
+        let v = pair_visibility(self.accel, recv, src, self.visibility, self.seed);
         if v.is_nan() {
             return None;
         }
@@ -216,25 +229,9 @@ impl PatchKernel<'_> {
         }
         let v = link.visibility as f64;
         let v = match self.leaf_visibility {
-            Some(sampling) if v > 0.0 && v < 1.0 => {
-                // Ordered by key as a link's rays are, so that a leaf-to-source pair casts the rays a link
-                // between the two would.
-                let (kt, ks) = (target.key(), src.key());
-                let (a, b) = if kt <= ks {
-                    (target, src)
-                } else {
-                    (src, target)
-                };
-                let own = visibility_fraction(
-                    self.accel,
-                    &a.polygon,
-                    a.face,
-                    &b.polygon,
-                    b.face,
-                    sampling,
-                    self.seed,
-                    link_stream(kt, ks),
-                );
+            Some(sampling) if self.patch_own_visibility(link) => {
+                // The rays a link between the leaf and the source would cast.
+                let own = pair_visibility(self.accel, target, src, sampling, self.seed);
                 if own.is_nan() { v } else { own }
             }
             _ => v,

@@ -49,9 +49,9 @@
 use glam::DVec3;
 use radlab_hierarchical::{
     GatherAt, LeafVisibility, LinearState, LinkError, LinkPayload, NodeKind, NodeView, Oracle,
-    Patch, SourceFlux, SourceLight, Transport, link_stream,
+    Patch, SourceFlux, SourceLight, Transport, link_stream, pair_visibility,
 };
-use radlab_kernels::form_factor::{VisibilitySampling, visibility_fraction};
+use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_kernels::open_fraction::{DEFAULT_OPEN_RAYS, point_sealed};
 use radlab_scene::sampling::mix64;
 use radlab_scene::{Rgb, Scene};
@@ -396,23 +396,8 @@ impl<const K: usize> Transport<Patch> for WaveletTransport<'_, K> {
         let rs = ElementRule::<K>::new(src, self.basis, self.points);
         let v = match self.leaf_visibility {
             Some(sampling) if self.leaves_see_for_themselves(link) => {
-                // Ordered by key as a link's rays are.
-                let (kt, ks) = (target.key(), src.key());
-                let (a, b) = if kt <= ks {
-                    (target, src)
-                } else {
-                    (src, target)
-                };
-                let own = visibility_fraction(
-                    self.accel,
-                    &a.polygon,
-                    a.face,
-                    &b.polygon,
-                    b.face,
-                    sampling,
-                    self.seed,
-                    link_stream(kt, ks),
-                );
+                // The rays a patch link between the leaf and the source would cast.
+                let own = pair_visibility(self.accel, target, src, sampling, self.seed);
                 if own.is_nan() {
                     link.visibility as f64
                 } else {
