@@ -858,12 +858,7 @@ mod tests {
             .find(|&f| (scene.faces[f].normal - DVec3::X).length() < 1e-12)
             .expect("the side x = 1");
         let floor = scene.faces.len() - 1;
-        let src = ElementValue {
-            face: floor,
-            polygon: scene.polygon(floor),
-            radiosity: Rgb::ONE,
-            open: 1.0,
-        };
+        let src = whole_face(&scene, floor);
         let settings = GatherSettings::with_seed(5);
         let mut rays = 0;
         for key in 0..64 {
@@ -875,6 +870,16 @@ mod tests {
             let v =
                 settings.visible_share(&accel, side, x, DVec3::X, key, 0, &src, true, &mut rays);
             assert_eq!(v, 1.0, "at {x}");
+        }
+    }
+
+    /// Face `f` whole, as one source element sending B = 1.
+    fn whole_face(scene: &Scene, f: FaceId) -> ElementValue {
+        ElementValue {
+            face: f,
+            polygon: scene.polygon(f),
+            radiosity: Rgb::ONE,
+            open: 1.0,
         }
     }
 
@@ -902,12 +907,7 @@ mod tests {
         let scene = b.build().expect("scene");
         assert!(scene.faces[1].normal.z < 0.0);
         let accel = Accel::new(&scene);
-        let held = ElementValue {
-            face: 1,
-            polygon: scene.polygon(1),
-            radiosity: Rgb::ONE,
-            open: 1.0,
-        };
+        let held = whole_face(&scene, 1);
         let g = FinalGather::new(&scene, &[held], GatherSettings::with_seed(3));
         for x in [0.05, 0.2, 0.35] {
             for y in [0.4, 1.0, 1.6] {
@@ -942,12 +942,7 @@ mod tests {
         let scene = b.build().expect("scene");
         assert!(scene.faces[1].normal.z < 0.0 && scene.faces[2].normal.x < 0.0);
         let accel = Accel::new(&scene);
-        let wall = ElementValue {
-            face: 2,
-            polygon: scene.polygon(2),
-            radiosity: Rgb::ONE,
-            open: 1.0,
-        };
+        let wall = whole_face(&scene, 2);
         let g = FinalGather::new(&scene, &[wall], GatherSettings::with_seed(3));
         let x = dvec3(0.496, 1.0, 0.0);
         // The exact answer: ρ ∫ V k B dA over the wall, on a fine grid, every cell's ray traced.
@@ -1176,12 +1171,7 @@ mod tests {
                 .find(|&f| scene.material(f).is_emitter())
                 .expect("light");
             assert!((scene.faces[light].normal - -DVec3::Z).length() < 1e-12);
-            let src = ElementValue {
-                face: light,
-                polygon: scene.polygon(light),
-                radiosity: Rgb::ONE,
-                open: 1.0,
-            };
+            let src = whole_face(&scene, light);
             let (mut weighted, mut area, mut rays, mut kernels) = (0.0, 0.0, 0u64, 0u64);
             let queries = 400;
             for key in 0..queries {
