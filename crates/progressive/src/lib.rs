@@ -14,7 +14,8 @@
 //!
 //! Around the shooting loop:
 //! - **Substructuring** (Cohen, Greenberg, Immel & Brock 1986): coarse *patches* shoot, finer *elements*
-//!   receive; a patch's radiosity is the area-weighted mean of its elements.
+//!   receive; a patch's radiosity is the area-weighted mean of its elements. By default a patch is one element
+//!   of `element_size`, and only the elements adaptive subdivision makes are finer than their patch.
 //! - **Adaptive subdivision**: after each step, neighbouring elements of a face whose radiosities differ by more
 //!   than a relative threshold are split in four (down to a minimum size); new elements re-gather from every
 //!   patch shot so far, so they hold what they would have held had they existed from the start.
@@ -36,11 +37,11 @@
 //! | name | default | meaning |
 //! |---|---|---|
 //! | `element_size` | 1/25 of the scene's bounding diagonal | receiving element size (longest edge, scene units) |
-//! | `patch_size` | 2 × `element_size` | shooting patch size; `= element_size` turns substructuring off |
+//! | `patch_size` | `element_size` | shooting patch size; larger shoots from patches of several elements (substructuring) |
 //! | `shots_per_step` | 1 | shots per `step()`; changes only the granularity, never the answer |
 //! | `visibility` | `jittered4x4` | visibility between element and an emitting shooter (direct light): `unoccluded`, `centre`, `jittered2x2`, `jittered4x4` (16 rays), `jittered8x8` |
 //! | `indirect_visibility` | `jittered2x2` | the same for shooters that do not emit (interreflected light) |
-//! | `quadrature` | 1 | m × m receiver points per element (1 = centroid) |
+//! | `quadrature` | 2 | m × m receiver points per element (1 = centroid) |
 //! | `stop_unshot_fraction` | 2e-3 | stop when unshot power ≤ this fraction of emitted power |
 //! | `max_shots` | none | stop after this many shots |
 //! | `adaptive` | true | adaptive subdivision on/off |
@@ -101,8 +102,10 @@
 //!   element); hierarchical methods scale better.
 //! - **Piecewise-constant elements** show their edges: adaptive subdivision refines shadow boundaries but only
 //!   where a neighbour's contrast reveals them, and an element smaller than `min_element_size` is never made.
-//! - **Substructuring** shoots a patch's mean radiosity uniformly: receivers very close to a patch with a
-//!   strong gradient across it see a smoothed source. Set `patch_size = element_size` when that matters.
+//! - **Substructuring** (`patch_size` above `element_size`) shoots a patch's mean radiosity uniformly:
+//!   receivers very close to a patch with a strong gradient across it see a smoothed source. It is off by
+//!   default since 2026-12-06: with 2 × 2-element patches the floor under the furnished room's ball answered
+//!   21% bright at its worst point, 8% with every element shooting (docs/defaults.md).
 //! - **Visibility noise**: `jittered4x4` estimates each visibility fraction from 16 rays; penumbrae carry that
 //!   noise, and contrast from it can trigger subdivision.
 

@@ -239,7 +239,12 @@ fn amount(scene: &Scene, p: &Patch, ambient: Option<Rgb>) -> Rgb {
 }
 
 /// The patch that would send the largest power Σ_c w_c A |s_c| (lowest index on ties) and what it sends, if
-/// any would send anything. `ambient` is the overshooting estimate B_amb, `None` for plain shooting.
+/// any would send anything. `ambient` is the overshooting estimate B_amb, `None` for plain shooting. Powers
+/// within a relative [`TIE`] of each other tie: equal patches (a lamp's elements) differ in area by rounding,
+/// which differs with the scene's scale, and the first shot must not depend on it.
+/// Relative difference below which two shooters' powers tie ([`select_shooter`]).
+const TIE: f64 = 1e-9;
+
 pub(crate) fn select_shooter(
     scene: &Scene,
     patches: &[Patch],
@@ -251,7 +256,7 @@ pub(crate) fn select_shooter(
     for (i, p) in patches.iter().enumerate() {
         let s = amount(scene, p, ambient);
         let power = p.open_area * s.abs().dot(weights);
-        if power > best_power {
+        if power > best_power * (1.0 + TIE) {
             best_power = power;
             best = Some((i, s));
         }

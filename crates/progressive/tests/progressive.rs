@@ -90,6 +90,7 @@ fn unoccluded_direct_light_is_exact_at_receiver_points() {
         element_size: Some(0.2),
         patch_size: Some(0.45),
         adaptive: false,
+        quadrature: 1,
         ..Default::default()
     };
     let mut solver = ProgressiveSolver::new(&scene, &accel, params, 9).expect("solver");
@@ -205,6 +206,9 @@ fn emitters_shoot_with_direct_visibility_and_the_rest_with_indirect() {
             adaptive: false,
             indirect_visibility: indirect,
             max_shots: Some(shots),
+            // Patches of 2 × 2 elements, the light four of them, at the centroid.
+            patch_size: Some(2.0 * radlab_answer::default_element_size(&scene)),
+            quadrature: 1,
             // Plain shooting, so the light's patches are the first four shooters.
             overshoot: Overshoot::None,
             ..Default::default()

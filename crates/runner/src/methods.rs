@@ -98,8 +98,9 @@ pub fn methods() -> Vec<MethodInfo> {
         ),
         method!(
             "progressive",
-            "Progressive refinement (Southwell shooting) with substructuring and adaptive subdivision: O(n) \
-             memory, a usable image after a few shots; the classic choice for simple scenes.",
+            "Progressive refinement (Southwell shooting) with adaptive subdivision (substructuring when \
+             patch_size exceeds element_size): O(n) memory, a usable image after a few shots; the classic choice \
+             for simple scenes.",
             radlab_progressive::ProgressiveParams,
             radlab_progressive::ProgressiveSolver,
             // Elements = patches = input faces, 2 × 2 receiver points. Its crate documentation states a
