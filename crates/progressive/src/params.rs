@@ -15,11 +15,11 @@ use serde::{Deserialize, Serialize};
 /// Default shooting patch size as a multiple of the element size: 1, every element shoots its own radiosity (no
 /// substructuring). With patches of 2 × 2 elements (2, the default until 2026-12-06) a patch shot its mean
 /// uniformly, and a receiver close to a patch with a shadow across it saw that mean: the furnished room's floor
-/// under its ball answered 21% bright at its worst point and the Cornell box 14%, against 8% for both at 1 with
+/// under its ball answered 21% bright at its worst point and the Cornell box 14%, against 8% and 12% at 1 with
 /// [`DEFAULT_QUADRATURE`] (docs/defaults.md).
 pub const DEFAULT_PATCH_FACTOR: f64 = 1.0;
 /// Default receiver quadrature, m × m points per element: 2. With every element shooting, one point (the
-/// centroid) answered a ρ = 0.9 room +0.58% bright on the whole, 2 × 2 points −0.13% (docs/defaults.md).
+/// centroid) answered a ρ = 0.9 room +0.58% bright on the whole, 2 × 2 points −0.10% (docs/defaults.md).
 pub const DEFAULT_QUADRATURE: u32 = 2;
 /// Default smallest element adaptive subdivision may create, as a fraction of the element size (two levels).
 pub const DEFAULT_MIN_ELEMENT_FACTOR: f64 = 0.25;

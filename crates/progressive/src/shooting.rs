@@ -238,13 +238,13 @@ fn amount(scene: &Scene, p: &Patch, ambient: Option<Rgb>) -> Rgb {
     }
 }
 
+/// Relative difference below which two shooters' powers tie ([`select_shooter`]).
+const TIE: f64 = 1e-9;
+
 /// The patch that would send the largest power Σ_c w_c A |s_c| (lowest index on ties) and what it sends, if
 /// any would send anything. `ambient` is the overshooting estimate B_amb, `None` for plain shooting. Powers
 /// within a relative [`TIE`] of each other tie: equal patches (a lamp's elements) differ in area by rounding,
 /// which differs with the scene's scale, and the first shot must not depend on it.
-/// Relative difference below which two shooters' powers tie ([`select_shooter`]).
-const TIE: f64 = 1e-9;
-
 pub(crate) fn select_shooter(
     scene: &Scene,
     patches: &[Patch],
