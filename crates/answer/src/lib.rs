@@ -14,6 +14,7 @@ pub mod irradiance_gouraud;
 pub mod locate;
 pub mod reconstruction;
 pub mod render;
+mod source_tree;
 
 pub use elements::{Element, ElementMesh, default_element_size, element_size};
 pub use locate::{ElementLocator, ElementTree};

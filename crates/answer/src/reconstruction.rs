@@ -57,6 +57,8 @@ enum Built {
 pub struct Reconstructor {
     kind: Reconstruction,
     settings: GatherSettings,
+    /// A final gather's opening ([`FinalGather::with_opening`]; 0: every element).
+    opening: f64,
     built: OnceLock<Built>,
     /// Gather work of solutions already invalidated (so the totals survive a rebuild).
     past: (u64, u64),
@@ -68,9 +70,17 @@ impl Reconstructor {
         Self {
             kind,
             settings: GatherSettings::with_seed(seed),
+            opening: 0.0,
             built: OnceLock::new(),
             past: (0, 0),
         }
+    }
+
+    /// The same with a final gather at opening `opening` ([`FinalGather::with_opening`]: far groups of
+    /// elements through one drawn element each; 0, the default, gathers every element).
+    pub fn with_opening(mut self, opening: f64) -> Self {
+        self.opening = opening;
+        self
     }
 
     /// Which reconstruction.
@@ -132,7 +142,10 @@ impl Reconstructor {
             }
             Reconstruction::FinalGather => {
                 let built = self.built.get_or_init(|| {
-                    Built::Gather(FinalGather::new(scene, &elements(), self.settings))
+                    Built::Gather(
+                        FinalGather::new(scene, &elements(), self.settings)
+                            .with_opening(self.opening),
+                    )
                 });
                 match built {
                     Built::Gather(g) => g.radiosity_at(scene, accel, face, point),
@@ -148,6 +161,7 @@ impl Clone for Reconstructor {
         Self {
             kind: self.kind,
             settings: self.settings,
+            opening: self.opening,
             built: OnceLock::new(),
             past: self.gather_work(),
         }

@@ -124,12 +124,6 @@ pub struct FaceClusterSolveParams {
     /// more rays, less noise, for setup time linear in the faces.
     #[schemars(range(min = 1, max = 1024))]
     pub self_rays: u32,
-    /// Final-gather only: a tree node smaller than this times its distance from the query point is gathered
-    /// whole by its power vector; 0 gathers every face exactly, a cost linear in the faces per point.
-    ///
-    /// See [`crate::cluster_gather`]: larger openings answer faster with an error of order their square.
-    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
-    pub gather_opening: f64,
     /// Final-gather only: the values the gather reads: solution (the solution's constant answers) or gathered
     /// (each face's value gathered first over the tree at values_opening: a second bounce, charged to
     /// answering). See [`GatherValues`].
@@ -154,6 +148,9 @@ impl Default for FaceClusterSolveParams {
                 // soup, 5% with a 140% worst point on the scanned dragon in its room; docs/defaults.md gives
                 // the figures). Gouraud costs no gather and stays a setting.
                 reconstruction: Reconstruction::FinalGather,
+                // Over the face-cluster tree ([`crate::cluster_gather`]): a node smaller than this times its
+                // distance is gathered whole by its power vector, with an error of order its square.
+                gather_opening: DEFAULT_OPENING,
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
@@ -161,7 +158,6 @@ impl Default for FaceClusterSolveParams {
             self_exchange: SelfExchangeMode::Traced,
             irradiance_field: IrradianceField::Linear,
             self_rays: SELF_RAYS,
-            gather_opening: DEFAULT_OPENING,
             gather_values: GatherValues::Solution,
             values_opening: DEFAULT_VALUES_OPENING,
             near_field: NearField::Off,
@@ -177,7 +173,8 @@ impl MethodParams for FaceClusterSolveParams {
     )];
 
     fn check_combination(&self) -> Result<(), SolveError> {
-        self.engine.check_combination()?;
+        let d = Self::default();
+        self.engine.check_engine(d.engine.gather_opening)?;
         // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
         // points of a patch): more rays than point pairs would repeat segments.
         let points = FaceClusterParams::default().samples_per_node.min(4);
@@ -194,15 +191,9 @@ impl MethodParams for FaceClusterSolveParams {
             ));
         }
         // The final gather's settings change nothing under other answers: refuse them there.
-        let d = Self::default();
         let reconstruction = self.engine.reconstruction;
         if reconstruction != Reconstruction::FinalGather {
             let set = [
-                (
-                    "gather_opening",
-                    self.gather_opening != d.gather_opening,
-                    self.gather_opening.to_string(),
-                ),
                 (
                     "gather_values",
                     self.gather_values != d.gather_values,
@@ -241,14 +232,14 @@ impl MethodParams for FaceClusterSolveParams {
                 ),
             ));
         }
-        if self.near_field != NearField::Off && self.gather_opening != 0.0 {
+        if self.near_field != NearField::Off && self.engine.gather_opening != 0.0 {
             return Err(SolveError::param(
                 "near_field",
                 format!(
                     "near_field = \"{}\" is a treatment of the flat gather over every face, and \
                      gather_opening is {}; set gather_opening = 0 or remove near_field",
                     self.near_field.as_str(),
-                    self.gather_opening
+                    self.engine.gather_opening
                 ),
             ));
         }
@@ -361,7 +352,7 @@ impl<'a> FaceClusterSolver<'a> {
         // A final gather goes over the face-cluster tree ([`ClusterGather`]), not over the engine's patch
         // leaves alone: the engine's output then gives the constant answers the gather reads.
         let gather_opening =
-            (p.reconstruction == Reconstruction::FinalGather).then_some(params.gather_opening);
+            (p.reconstruction == Reconstruction::FinalGather).then_some(p.gather_opening);
         let output = SurfaceOutput::new(
             if gather_opening.is_some() {
                 Reconstruction::Constant

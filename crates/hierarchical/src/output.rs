@@ -35,6 +35,13 @@ impl SurfaceOutput {
         }
     }
 
+    /// The same with a final gather at opening `opening` (radlab-answer's
+    /// [`radlab_answer::final_gather::FinalGather::with_opening`]; 0 gathers every leaf).
+    pub fn with_gather_opening(mut self, opening: f64) -> Self {
+        self.answer = self.answer.with_opening(opening);
+        self
+    }
+
     /// How points are answered.
     pub fn reconstruction(&self) -> Reconstruction {
         self.answer.kind()

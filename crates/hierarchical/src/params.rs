@@ -173,6 +173,16 @@ pub struct HierarchicalParams {
     /// per leaf and query, so images of finely refined solutions are slow; ask for constant to read the leaves
     /// themselves.
     pub reconstruction: Reconstruction,
+    /// Final-gather only: a group of leaves whose bounding radius is below this times its distance from the
+    /// query point is gathered whole, through one leaf drawn by its light (face clusters: a node of their tree,
+    /// by its power vector); 0 gathers every leaf, a cost linear in the leaves per point.
+    ///
+    /// Groups holding a light or a leaf along a contact are always opened, as is a group holding more than
+    /// 1e-4 of the point's estimated light, and leaves near the point keep their near field
+    /// (radlab-answer's final gather and its source tree; Barnes & Hut 1986, Yuksel 2019). Larger openings
+    /// answer faster, with more noise.
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
+    pub gather_opening: f64,
     /// Memory the elements and links may take, MiB; a refinement beyond it is refused.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
@@ -203,6 +213,7 @@ impl HierarchicalParams {
             max_steps: 100_000,
             gather: Gather::Leaf,
             reconstruction: DEFAULT_RECONSTRUCTION,
+            gather_opening: 0.0,
             memory_budget_mib: 4096.0,
         }
     }
@@ -257,6 +268,28 @@ impl Default for HierarchicalParams {
 
 impl MethodParams for HierarchicalParams {
     fn check_combination(&self) -> Result<(), SolveError> {
+        self.check_engine(Self::default_params().gather_opening)
+    }
+}
+
+impl HierarchicalParams {
+    /// The checks of every method on the engine, for a method whose default opening is `default_opening`:
+    /// an opening other than that default is refused under answers other than a final gather, where it
+    /// would change nothing.
+    pub fn check_engine(&self, default_opening: f64) -> Result<(), SolveError> {
+        if self.reconstruction != Reconstruction::FinalGather
+            && self.gather_opening != default_opening
+        {
+            return Err(SolveError::param(
+                "gather_opening",
+                format!(
+                    "gather_opening = {} only applies to final-gather answers, and reconstruction is {}; set \
+                     reconstruction = \"final-gather\" or remove gather_opening",
+                    self.gather_opening,
+                    self.reconstruction.as_str()
+                ),
+            ));
+        }
         if self.oracle == Oracle::Variation && self.quadrature < 2 {
             return Err(SolveError::param(
                 "quadrature",
@@ -317,6 +350,8 @@ mod tests {
             ("tolerance", "nan"),
             ("oracle", "fancy"),
             ("max_steps", "0"),
+            ("gather_opening", "1"),
+            ("gather_opening", "-0.1"),
         ] {
             let e = HierarchicalParams::from_pairs(&[(k.to_string(), v.to_string())])
                 .expect_err("rejected")
@@ -327,6 +362,20 @@ mod tests {
             .expect_err("unknown")
             .to_string();
         assert!(e.contains("nope"), "{e}");
+        // An opening changes only a final gather's answers: refused under the others, naming the fix.
+        let e = HierarchicalParams::from_pairs(&[
+            ("reconstruction".into(), "constant".into()),
+            ("gather_opening".into(), "0.25".into()),
+        ])
+        .expect_err("refused")
+        .to_string();
+        assert!(
+            e.contains("gather_opening") && e.contains("final-gather"),
+            "{e}"
+        );
+        let p = HierarchicalParams::from_pairs(&[("gather_opening".into(), "0.25".into())])
+            .expect("a final gather's opening");
+        assert_eq!(p.gather_opening, 0.25);
     }
 
     #[test]

@@ -45,7 +45,8 @@ impl<'a> HierarchicalSolver<'a> {
         )
         .with_leaf_visibility(params.leaf_visibility)
         .with_open_shares(scene);
-        let output = SurfaceOutput::new(params.reconstruction, seed);
+        let output = SurfaceOutput::new(params.reconstruction, seed)
+            .with_gather_opening(params.gather_opening);
         let engine = Engine::new(roots, kernel, params, min_size)?;
         Ok(Self {
             scene,

@@ -75,7 +75,8 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         let transport = ClusterTransport::new(patches, accel, p.visibility, p.quadrature, seed)
             .with_reachable(enclosures.reachable)
             .with_straddle_cone(params.straddle_angle.to_radians());
-        let output = SurfaceOutput::new(p.reconstruction, seed);
+        let output =
+            SurfaceOutput::new(p.reconstruction, seed).with_gather_opening(p.gather_opening);
         let n_roots = roots.len() as u32;
         let mut engine = Engine::new(roots, transport, p, min_size)?;
         engine.expand(|n| matches!(n, ClusterNode::Cluster(_)))?;
