@@ -108,7 +108,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::DVec3;
 
 use crate::gouraud::ElementValue;
-use crate::source_tree::{Reached, SourceTree};
+use crate::source_tree::{Leaf, Reached, SourceTree};
 use radlab_kernels::form_factor::{VisibilitySampling, point_polygon};
 use radlab_kernels::open_fraction::{DEFAULT_OPEN_RAYS, POINT_SEAL_RAYS, point_sealed};
 use radlab_scene::sampling::{self, mix64};
@@ -446,22 +446,22 @@ impl FinalGather {
     fn with_groups(mut self, opening: f64, share: f64) -> Self {
         self.opening = (opening, share);
         self.tree = (opening > 0.0).then(|| {
-            let spheres: Vec<(DVec3, f64)> =
-                self.reach.iter().map(|r| (r.centre, r.radius)).collect();
-            let centroids: Vec<DVec3> = self.reach.iter().map(|r| r.centre).collect();
-            let areas: Vec<f64> = self.sources.iter().map(|(s, _)| s.polygon.area()).collect();
-            let weights = self
+            let leaves: Vec<Leaf> = self
                 .sources
                 .iter()
-                .zip(&areas)
-                .map(|((s, _), a)| a * s.radiosity.element_sum())
+                .zip(&self.reach)
+                .map(|((s, emits), reach)| {
+                    let area = s.polygon.area();
+                    Leaf {
+                        sphere: (reach.centre, reach.radius),
+                        centroid: reach.centre,
+                        weight: area * s.radiosity.element_sum(),
+                        area,
+                        opened: *emits || s.open < 1.0,
+                    }
+                })
                 .collect();
-            let opened: Vec<bool> = self
-                .sources
-                .iter()
-                .map(|(s, emits)| *emits || s.open < 1.0)
-                .collect();
-            SourceTree::new(&spheres, &centroids, (weights, areas), &opened)
+            SourceTree::new(&leaves)
         });
         self
     }

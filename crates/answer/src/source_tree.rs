@@ -19,7 +19,7 @@
 //! W_C = Σ_{i∈C} A_i (B_i,r + B_i,g + B_i,b) times its estimated factor (max(0, n·(c_C − x)) + R_C) / |c_C − x|³
 //! (c_C, R_C its sphere), so a draw costs the group's depth and q_i is the product of the choices. (By the
 //! weights alone the draws' relative RMS deviation from the flat gather was 4.5% against 4.0% on a test's
-//! finely meshed Cornell box at θ = 0.25.)
+//! finely meshed Cornell box at θ = 0.25, without the share bound below.)
 //!
 //! The estimated light of a group is unoccluded, with every element facing x: (W_N / 3) min(g_N, 1 / A_N),
 //! g_N = (max(0, n·(c_N − x)) + R) / (π r³) and A_N its area (a factor of at most 1), summed for the total
@@ -32,7 +32,8 @@
 //! wholly behind the query's plane is skipped. At θ = 0 no group is far and the gather visits every element.
 //!
 //! The tree is built top-down over the elements' centroids, each node split at the median of its longest
-//! axis (ties by index, so the tree depends only on the elements), down to one element per leaf.
+//! axis, down to one element per leaf; positions are compared in units of 2^-32 of the node's extent, ties
+//! by index, so the tree depends only on the elements and not on the scene's scale.
 
 use glam::DVec3;
 use radlab_scene::sampling::{self, Rng};
@@ -60,48 +61,45 @@ struct Node {
     children: [u32; 2],
 }
 
+/// An element as the tree sees it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Leaf {
+    /// A sphere bounding the element: centre and radius.
+    pub sphere: (DVec3, f64),
+    /// Its centroid.
+    pub centroid: DVec3,
+    /// Its weight w ≥ 0 (area times the sum of its radiosity's channels).
+    pub weight: f64,
+    /// Its area.
+    pub area: f64,
+    /// Groups holding it are never far.
+    pub opened: bool,
+}
+
 /// The tree over a gather's source elements.
 #[derive(Debug)]
 pub(crate) struct SourceTree {
     nodes: Vec<Node>,
-    /// Per element, its weight w and its area.
-    weights: Vec<f64>,
-    areas: Vec<f64>,
 }
 
 impl SourceTree {
-    /// The tree over elements with bounding spheres `spheres` (centre, radius), centroids `centroids`,
-    /// weights `weights` (w_i ≥ 0), areas `areas` and `opened` marks (groups holding a marked element are
-    /// never far).
-    pub(crate) fn new(
-        spheres: &[(DVec3, f64)],
-        centroids: &[DVec3],
-        (weights, areas): (Vec<f64>, Vec<f64>),
-        opened: &[bool],
-    ) -> Self {
+    /// The tree over `leaves`, element j being `leaves[j]`.
+    pub(crate) fn new(leaves: &[Leaf]) -> Self {
         let mut tree = Self {
-            nodes: Vec::with_capacity(2 * spheres.len()),
-            weights,
-            areas,
+            nodes: Vec::with_capacity(2 * leaves.len()),
         };
-        let mut order: Vec<u32> = (0..spheres.len() as u32).collect();
+        let mut order: Vec<u32> = (0..leaves.len() as u32).collect();
         if !order.is_empty() {
-            tree.build(&mut order, spheres, centroids, opened);
+            tree.build(&mut order, leaves);
         }
         tree
     }
 
     /// Builds the node over `items` (element indices), children first; returns its index.
-    fn build(
-        &mut self,
-        items: &mut [u32],
-        spheres: &[(DVec3, f64)],
-        centroids: &[DVec3],
-        opened: &[bool],
-    ) -> u32 {
+    fn build(&mut self, items: &mut [u32], leaves: &[Leaf]) -> u32 {
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for &i in items.iter() {
-            let (c, r) = spheres[i as usize];
+            let (c, r) = leaves[i as usize].sphere;
             lo = lo.min(c - r);
             hi = hi.max(c + r);
         }
@@ -109,19 +107,19 @@ impl SourceTree {
         let radius = items
             .iter()
             .map(|&i| {
-                let (c, r) = spheres[i as usize];
+                let (c, r) = leaves[i as usize].sphere;
                 (c - centre).length() + r
             })
             .fold(0.0, f64::max);
         let id = self.nodes.len() as u32;
         if let [only] = items {
-            let j = *only as usize;
+            let leaf = &leaves[*only as usize];
             self.nodes.push(Node {
                 centre,
                 radius,
-                weight: self.weights[j],
-                area: self.areas[j],
-                opened: opened[j],
+                weight: leaf.weight,
+                area: leaf.area,
+                opened: leaf.opened,
                 children: [u32::MAX, *only],
             });
             return id;
@@ -132,8 +130,8 @@ impl SourceTree {
         // rounding makes unequal at another scale, must not change the tree when the scene is scaled.
         let (mut clo, mut chi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for &i in items.iter() {
-            clo = clo.min(centroids[i as usize]);
-            chi = chi.max(centroids[i as usize]);
+            clo = clo.min(leaves[i as usize].centroid);
+            chi = chi.max(leaves[i as usize].centroid);
         }
         let extent = chi - clo;
         let wider = |a: f64, b: f64| a >= b * (1.0 - 1e-9);
@@ -147,7 +145,7 @@ impl SourceTree {
         let (lo, span) = (clo[axis], extent[axis]);
         let key = |i: u32| {
             let t = if span > 0.0 {
-                (centroids[i as usize][axis] - lo) / span
+                (leaves[i as usize].centroid[axis] - lo) / span
             } else {
                 0.0
             };
@@ -164,8 +162,8 @@ impl SourceTree {
             children: [0, 0],
         });
         let (left, right) = items.split_at_mut(mid);
-        let l = self.build(left, spheres, centroids, opened);
-        let r = self.build(right, spheres, centroids, opened);
+        let l = self.build(left, leaves);
+        let r = self.build(right, leaves);
         let (a, b) = (self.nodes[l as usize], self.nodes[r as usize]);
         let node = &mut self.nodes[id as usize];
         node.weight = a.weight + b.weight;
@@ -178,7 +176,6 @@ impl SourceTree {
     /// Approximate heap bytes held.
     pub(crate) fn bytes(&self) -> usize {
         self.nodes.capacity() * size_of::<Node>()
-            + (self.weights.capacity() + self.areas.capacity()) * size_of::<f64>()
     }
 
     /// Calls `reach` for what a gather at `point` (normal `normal`) with opening `opening` visits: every
@@ -295,24 +292,31 @@ mod tests {
     use super::*;
     use glam::dvec3;
 
-    fn grid(n: usize) -> (Vec<(DVec3, f64)>, Vec<DVec3>, Vec<f64>) {
-        let c: Vec<DVec3> = (0..n * n)
-            .map(|k| dvec3((k % n) as f64, (k / n) as f64, 0.0))
-            .collect();
-        let s = c.iter().map(|&c| (c, 0.5)).collect();
-        let w = (0..n * n).map(|k| 1.0 + (k % 7) as f64).collect();
-        (s, c, w)
+    /// An n × n grid of unit squares in the plane z = 0, facing +z, weights 1 + (k mod 7).
+    fn grid(n: usize) -> Vec<Leaf> {
+        (0..n * n)
+            .map(|k| {
+                let c = dvec3((k % n) as f64, (k / n) as f64, 0.0);
+                Leaf {
+                    sphere: (c, 0.5f64.sqrt()),
+                    centroid: c,
+                    weight: 1.0 + (k % 7) as f64,
+                    area: 1.0,
+                    opened: false,
+                }
+            })
+            .collect()
     }
 
     /// At opening 0 every element is reached once, whole; the draws of a far group come out as often as
-    /// their probabilities say, and the probabilities of a group's elements sum to one.
+    /// their probabilities say, the probabilities of a group's elements sum to one, and per unit weight the
+    /// element under the point is likelier than one in a far corner.
     #[test]
     fn every_element_is_reached_at_opening_zero_and_draws_follow_the_weights() {
-        let (s, c, w) = grid(9);
-        let a = vec![1.0; s.len()];
-        let tree = SourceTree::new(&s, &c, (w.clone(), a), &vec![false; s.len()]);
+        let leaves = grid(9);
+        let tree = SourceTree::new(&leaves);
         let mut r = sampling::rng(3, 0);
-        let mut seen = vec![0; s.len()];
+        let mut seen = vec![0; leaves.len()];
         tree.visit(
             dvec3(4.0, 4.0, 1.0),
             DVec3::NEG_Z,
@@ -324,11 +328,10 @@ mod tests {
             },
         );
         assert!(seen.iter().all(|&k| k == 1), "{seen:?}");
-        // The root drawn many times for a point above the grid: each element comes out as often as its
-        // probability q says, the probabilities sum to one, and nearer elements of equal weight are likelier.
+        // The root drawn many times for a point above element 2 + 3·9.
         let (x, n) = (dvec3(2.0, 3.0, 5.0), DVec3::NEG_Z);
-        let mut count = vec![0usize; s.len()];
-        let mut q = vec![0.0; s.len()];
+        let mut count = vec![0usize; leaves.len()];
+        let mut q = vec![0.0; leaves.len()];
         let draws = 200_000;
         for _ in 0..draws {
             let (j, p) = tree.draw(0, sampling::uniform(&mut r), x, n);
@@ -347,33 +350,28 @@ mod tests {
                 q[j]
             );
         }
-        // Elements 2 + 3·9 (under x) and 8 + 8·9 (far corner) have equal weights (k mod 7 = 1 and 2: not
-        // equal) -- compare by q per unit weight instead.
+        let per_weight = |j: usize| q[j] / leaves[j].weight;
         assert!(
-            q[29] / w[29] > q[80] / w[80],
-            "{} vs {}",
-            q[29] / w[29],
-            q[80] / w[80]
+            per_weight(29) > per_weight(80),
+            "{} against {}",
+            per_weight(29),
+            per_weight(80)
         );
     }
 
-    /// Far from the grid every group is far: fewer visits than elements; groups behind the point's plane are
-    /// skipped; a marked element's groups are always opened down to it.
+    /// Far from the grid groups are drawn: fewer visits than elements; a marked element's groups are opened
+    /// down to it; a share bound below every group's estimated light opens them all; groups behind the
+    /// point's plane are skipped.
     #[test]
-    fn far_groups_are_drawn_behind_groups_skipped_and_marked_groups_opened() {
-        let (s, c, w) = grid(16);
-        let mut marked = vec![false; s.len()];
-        marked[37] = true;
-        let a = vec![1.0; s.len()];
-        let tree = SourceTree::new(&s, &c, (w, a), &marked);
+    fn far_groups_are_drawn_marked_and_bright_groups_opened_and_groups_behind_skipped() {
+        let mut leaves = grid(16);
+        leaves[37].opened = true;
+        let tree = SourceTree::new(&leaves);
         let mut r = sampling::rng(5, 0);
-        let (mut whole, mut drawn, mut saw_marked) = (0, 0, false);
-        tree.visit(
-            dvec3(7.5, 7.5, 200.0),
-            DVec3::NEG_Z,
-            (0.5, 1.0),
-            &mut r,
-            |x| match x {
+        let x = dvec3(7.5, 7.5, 200.0);
+        let mut visit = |normal: DVec3, share: f64| {
+            let (mut whole, mut drawn, mut saw_marked) = (0, 0, false);
+            tree.visit(x, normal, (0.5, share), &mut r, |reached| match reached {
                 Reached::Element(j) => {
                     whole += 1;
                     saw_marked |= j == 37;
@@ -382,14 +380,21 @@ mod tests {
                     assert!(q > 0.0 && q <= 1.0);
                     drawn += 1;
                 }
-            },
-        );
+            });
+            (whole, drawn, saw_marked)
+        };
+        let (whole, drawn, saw_marked) = visit(DVec3::NEG_Z, 1.0);
         assert!(saw_marked, "the marked element is reached whole");
-        assert!(whole + drawn < 40, "{whole} whole, {drawn} drawn of 256");
-        let mut any = 0;
-        tree.visit(dvec3(7.5, 7.5, 200.0), DVec3::Z, (0.5, 1.0), &mut r, |_| {
-            any += 1
-        });
-        assert_eq!(any, 0, "the grid lies wholly behind a point facing away");
+        assert!(
+            drawn > 0 && whole + drawn < 40,
+            "{whole} whole, {drawn} drawn of 256"
+        );
+        // Each element holds about 1/256 of the light: a bound of 1e-3 leaves no group far.
+        assert_eq!(visit(DVec3::NEG_Z, 1e-3), (256, 0, true));
+        assert_eq!(
+            visit(DVec3::Z, 1.0),
+            (0, 0, false),
+            "the grid lies wholly behind a point facing away"
+        );
     }
 }
