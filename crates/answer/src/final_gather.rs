@@ -1383,6 +1383,19 @@ mod tests {
         }
     }
 
+    /// The Cornell box meshed at `size` whose elements hold values varying by up to a factor 2 from one
+    /// element to the next, with its rays.
+    fn uneven_cornell(size: f64) -> (Scene, Accel, Vec<ElementValue>) {
+        let scene = builtin("cornell").expect("cornell");
+        let accel = Accel::new(&scene);
+        let mesh = ElementMesh::new(&scene, size);
+        let values: Vec<Rgb> = (0..mesh.len())
+            .map(|i| Rgb::new(0.2, 0.3, 0.4) * (1.0 + (i % 7) as f64 / 7.0))
+            .collect();
+        let els = mesh.values(&values);
+        (scene, accel, els)
+    }
+
     /// A far field that is the same sum over every source with the same visibility rays (one to each
     /// non-emitter's centroid, the emitters' jittered rays from the same streams) gives the same near-field
     /// values as the gather's own pass over every source: far part = the whole sum less the near set's. So
@@ -1414,13 +1427,7 @@ mod tests {
                 sum
             }
         }
-        let scene = builtin("cornell").expect("cornell");
-        let accel = Accel::new(&scene);
-        let mesh = ElementMesh::new(&scene, 150.0);
-        let values: Vec<Rgb> = (0..mesh.len())
-            .map(|i| Rgb::new(0.2, 0.3, 0.4) * (1.0 + (i % 7) as f64 / 7.0))
-            .collect();
-        let els = mesh.values(&values);
+        let (scene, accel, els) = uneven_cornell(150.0);
         let own = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
         let given = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
         let far = EverySource {
@@ -1597,13 +1604,7 @@ mod tests {
     /// standard errors.
     #[test]
     fn a_tree_gather_estimates_the_flat_gather_for_less_work() {
-        let scene = builtin("cornell").expect("cornell");
-        let accel = Accel::new(&scene);
-        let mesh = ElementMesh::new(&scene, 25.0);
-        let values: Vec<Rgb> = (0..mesh.len())
-            .map(|i| Rgb::new(0.2, 0.3, 0.4) * (1.0 + (i % 7) as f64 / 7.0))
-            .collect();
-        let els = mesh.values(&values);
+        let (scene, accel, els) = uneven_cornell(25.0);
         assert!(els.len() > 3000, "{} elements", els.len());
         let gather = |seed: u64, opening: f64, share: f64| {
             FinalGather::new(&scene, &els, GatherSettings::with_seed(seed))
