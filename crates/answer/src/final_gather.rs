@@ -401,9 +401,9 @@ pub struct FinalGather {
     /// Per source, its near-field sub-polygons with their radiosities, computed at the first near query.
     near: Vec<OnceLock<NearValues>>,
     settings: GatherSettings,
-    /// The opening θ of [`FinalGather::with_opening`] (0: every source, the flat gather), and the largest
-    /// share of a point's light a far group may hold ([`GROUP_SHARE`]).
-    opening: (f64, f64),
+    /// Which groups of sources are far: the opening θ of [`FinalGather::with_opening`] (0: none, the flat
+    /// gather) and the largest share of a point's light a far group may hold ([`GROUP_SHARE`]).
+    far_groups: (f64, f64),
     /// The tree over the sources, at a positive opening.
     tree: Option<SourceTree>,
     rays: AtomicU64,
@@ -424,7 +424,7 @@ impl FinalGather {
             reach: sources.iter().map(|(e, _)| Reach::of(&e.polygon)).collect(),
             sources,
             settings,
-            opening: (0.0, GROUP_SHARE),
+            far_groups: (0.0, GROUP_SHARE),
             tree: None,
             rays: AtomicU64::new(0),
             kernels: AtomicU64::new(0),
@@ -444,7 +444,7 @@ impl FinalGather {
 
     /// [`FinalGather::with_opening`] with far groups holding at most `share` of a point's estimated light.
     fn with_groups(mut self, opening: f64, share: f64) -> Self {
-        self.opening = (opening, share);
+        self.far_groups = (opening, share);
         self.tree = (opening > 0.0).then(|| {
             let leaves: Vec<Leaf> = self
                 .sources
@@ -643,7 +643,7 @@ impl FinalGather {
                     f_near += point_polygon(c, n, &self.sources[i].0.polygon).max(0.0);
                 }
                 let mut r = sampling::rng(self.settings.seed, key ^ mix64(TREE_STREAM));
-                tree.visit(c, n, self.opening, &mut r, |reached| match reached {
+                tree.visit(c, n, self.far_groups, &mut r, |reached| match reached {
                     Reached::Element(i) => {
                         let s = &self.sources[i].0;
                         if s.face == src.face || is_near[i] {
@@ -797,7 +797,7 @@ impl FinalGather {
             // A point in or beside a gap measures every source's share with its own rays.
             Some(tree) if !in_gap => {
                 let mut r = sampling::rng(self.settings.seed, key ^ mix64(TREE_STREAM));
-                tree.visit(point, n, self.opening, &mut r, |reached| match reached {
+                tree.visit(point, n, self.far_groups, &mut r, |reached| match reached {
                     Reached::Element(j) => {
                         if self.sources[j].0.face != face {
                             self.add_source(
