@@ -52,10 +52,10 @@
 use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
-use radlab_answer::Reconstruction;
 use radlab_answer::final_gather::{FinalGather, GatherSettings};
 use radlab_answer::gouraud::ElementValue;
 use radlab_answer::irradiance_gouraud;
+use radlab_answer::{AnswerParams, Reconstruction};
 use radlab_hierarchical::{
     Engine, ErrorNorm, HierarchicalParams, LinearState, NodeKind, PatchKernel, SurfaceOutput,
 };
@@ -147,10 +147,9 @@ impl Default for FaceClusterSolveParams {
                 // answers smear light across shadow edges: 21% mean in the furnished room, 37% on a polygon
                 // soup, 5% with a 140% worst point on the scanned dragon in its room; docs/defaults.md gives
                 // the figures). Gouraud costs no gather and stays a setting.
-                reconstruction: Reconstruction::FinalGather,
-                // Over the face-cluster tree ([`crate::cluster_gather`]): a node smaller than this times its
-                // distance is gathered whole by its power vector, with an error of order its square.
-                gather_opening: DEFAULT_OPENING,
+                // Over the face-cluster tree ([`crate::cluster_gather`]): a node smaller than the opening times
+                // its distance is gathered whole by its power vector, with an error of order its square.
+                answer: AnswerParams::final_gather(DEFAULT_OPENING),
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
@@ -174,7 +173,7 @@ impl MethodParams for FaceClusterSolveParams {
 
     fn check_combination(&self) -> Result<(), SolveError> {
         let d = Self::default();
-        self.engine.check_engine(d.engine.gather_opening)?;
+        self.engine.check_engine(d.engine.answer.gather_opening)?;
         // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
         // points of a patch): more rays than point pairs would repeat segments.
         let points = FaceClusterParams::default().samples_per_node.min(4);
@@ -191,7 +190,7 @@ impl MethodParams for FaceClusterSolveParams {
             ));
         }
         // The final gather's settings change nothing under other answers: refuse them there.
-        let reconstruction = self.engine.reconstruction;
+        let reconstruction = self.engine.answer.reconstruction;
         if reconstruction != Reconstruction::FinalGather {
             let set = [
                 (
@@ -232,14 +231,14 @@ impl MethodParams for FaceClusterSolveParams {
                 ),
             ));
         }
-        if self.near_field != NearField::Off && self.engine.gather_opening != 0.0 {
+        if self.near_field != NearField::Off && self.engine.answer.gather_opening != 0.0 {
             return Err(SolveError::param(
                 "near_field",
                 format!(
                     "near_field = \"{}\" is a treatment of the flat gather over every face, and \
                      gather_opening is {}; set gather_opening = 0 or remove near_field",
                     self.near_field.as_str(),
-                    self.engine.gather_opening
+                    self.engine.answer.gather_opening
                 ),
             ));
         }
@@ -351,17 +350,20 @@ impl<'a> FaceClusterSolver<'a> {
         .with_field(params.irradiance_field);
         // A final gather goes over the face-cluster tree ([`ClusterGather`]), not over the engine's patch
         // leaves alone: the engine's output then gives the constant answers the gather reads.
-        let gather_opening =
-            (p.reconstruction == Reconstruction::FinalGather).then_some(p.gather_opening);
+        let gather_opening = (p.answer.reconstruction == Reconstruction::FinalGather)
+            .then_some(p.answer.gather_opening);
         let output = SurfaceOutput::new(
-            if gather_opening.is_some() {
-                Reconstruction::Constant
-            } else {
-                p.reconstruction
+            &AnswerParams {
+                reconstruction: if gather_opening.is_some() {
+                    Reconstruction::Constant
+                } else {
+                    p.answer.reconstruction
+                },
+                gather_opening: 0.0,
             },
             seed,
         );
-        let gouraud = p.reconstruction == Reconstruction::Gouraud;
+        let gouraud = p.answer.reconstruction == Reconstruction::Gouraud;
         let root = ctx.root_volume();
         let mut engine = Engine::new(vec![root], transport, p, min_size)?;
         engine.skip_initial_links();

@@ -355,7 +355,7 @@ fn an_opening_outside_zero_to_one_or_without_a_final_gather_is_refused() {
         "{err}"
     );
     let ok = params(&[("reconstruction", "final-gather"), ("gather_opening", "0")]);
-    assert_eq!(ok.engine.gather_opening, 0.0);
+    assert_eq!(ok.engine.answer.gather_opening, 0.0);
     assert!(ok.validate().is_ok());
 }
 

@@ -27,6 +27,7 @@
 //! | `max_steps` | 100000 | hard stop, reported as `Step::Capped` (a cap, not a convergence) |
 //! | `gather` | `leaf` | `leaf` (kernel integrated at each leaf for every link above it; exact form-factor sums) or `link` (classic per-link mean, pushed) |
 //! | `reconstruction` | `final-gather` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_answer::reconstruction); the default chosen by measurement ([`DEFAULT_RECONSTRUCTION`]) |
+//! | `gather_opening` | 0.25 | final-gather only: far groups of leaves through one drawn leaf each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every leaf |
 //! | `memory_budget_mib` | 4096 | refuse to hold more |
 //!
 //! Every quantity is relative (ε, tolerance) or relative to the scene's size (the default minimum element), so
@@ -150,6 +151,8 @@ pub use params::{
 };
 pub use patch_transport::{PatchKernel, pair_visibility, reflect_scalar};
 pub use push_pull::LinkFilter;
+/// The answering parameters the engine's [`HierarchicalParams`] flatten in (radlab-answer's).
+pub use radlab_answer::AnswerParams;
 pub use shooting::{LinkCache, SHOOT_SHARE};
 pub use solver::HierarchicalSolver;
 pub use transport::{

@@ -7,7 +7,7 @@
 //! Greenberg 1993). Solvers built on the engine (patches, volume clusters) share it.
 
 use glam::DVec3;
-use radlab_answer::{Reconstruction, Reconstructor, gouraud::ElementValue};
+use radlab_answer::{AnswerParams, Reconstruction, Reconstructor, gouraud::ElementValue};
 use radlab_scene::{FaceId, Rgb, Scene};
 use radlab_visibility::Accel;
 
@@ -27,19 +27,14 @@ pub struct SurfaceOutput {
 }
 
 impl SurfaceOutput {
-    /// Output with the given reconstruction; a final gather draws its rays from `seed`.
-    pub fn new(reconstruction: Reconstruction, seed: u64) -> Self {
+    /// Output answering as `params` ask (a final gather at their opening: radlab-answer's
+    /// [`radlab_answer::final_gather::FinalGather::with_opening`]; 0 gathers every leaf); a final gather draws
+    /// its rays from `seed`.
+    pub fn new(params: &AnswerParams, seed: u64) -> Self {
         Self {
-            answer: Reconstructor::new(reconstruction, seed),
+            answer: Reconstructor::of(params, seed),
             element_index: Vec::new(),
         }
-    }
-
-    /// The same with a final gather at opening `opening` (radlab-answer's
-    /// [`radlab_answer::final_gather::FinalGather::with_opening`]; 0 gathers every leaf).
-    pub fn with_gather_opening(mut self, opening: f64) -> Self {
-        self.answer = self.answer.with_opening(opening);
-        self
     }
 
     /// How points are answered.

@@ -4,7 +4,7 @@
 //! (serde kebab-case), every field has a documented default, and [`HierarchicalParams::coarse`] and
 //! [`HierarchicalParams::reference`] are named presets.
 
-use radlab_answer::Reconstruction;
+use radlab_answer::{AnswerParams, DEFAULT_GATHER_OPENING, Reconstruction};
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
 use schemars::JsonSchema;
@@ -165,24 +165,12 @@ pub struct HierarchicalParams {
     /// How leaves gather from the links above them: leaf (the kernel at each leaf for every link above it) or
     /// link (classic: each link's receiver mean, pushed down).
     pub gather: Gather,
-    /// How radiosity at a point is answered: constant (per leaf), gouraud (vertex-interpolated) or
-    /// final-gather (one more gather from every leaf with exact point-to-polygon factors and rays, charged to
-    /// answering).
+    /// How points are answered: reconstruction and gather_opening, declared once in radlab-answer.
     ///
-    /// Gouraud interpolates over each face's quadtree with T-vertices resolved. A final gather costs a kernel
-    /// per leaf and query, so images of finely refined solutions are slow; ask for constant to read the leaves
-    /// themselves.
-    pub reconstruction: Reconstruction,
-    /// Final-gather only: a group of leaves whose bounding radius is below this times its distance from the
-    /// query point is gathered whole, through one leaf drawn by its light (face clusters: a node of their tree,
-    /// by its power vector); 0 gathers every leaf, a cost linear in the leaves per point.
-    ///
-    /// Groups holding a light or a leaf along a contact are always opened, as is a group holding more than
-    /// 1e-4 of the point's estimated light, and leaves near the point keep their near field
-    /// (radlab-answer's final gather and its source tree; Barnes & Hut 1986, Yuksel 2019). Larger openings
-    /// answer faster, with more noise.
-    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
-    pub gather_opening: f64,
+    /// Gouraud interpolates over each face's quadtree with T-vertices resolved; a final gather goes over the
+    /// leaves.
+    #[serde(flatten)]
+    pub answer: AnswerParams,
     /// Memory the elements and links may take, MiB; a refinement beyond it is refused.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
@@ -212,8 +200,10 @@ impl HierarchicalParams {
             tolerance: 1e-4,
             max_steps: 100_000,
             gather: Gather::Leaf,
-            reconstruction: DEFAULT_RECONSTRUCTION,
-            gather_opening: 0.0,
+            answer: AnswerParams {
+                reconstruction: DEFAULT_RECONSTRUCTION,
+                gather_opening: DEFAULT_GATHER_OPENING,
+            },
             memory_budget_mib: 4096.0,
         }
     }
@@ -268,7 +258,7 @@ impl Default for HierarchicalParams {
 
 impl MethodParams for HierarchicalParams {
     fn check_combination(&self) -> Result<(), SolveError> {
-        self.check_engine(Self::default_params().gather_opening)
+        self.check_engine(Self::default_params().answer.gather_opening)
     }
 }
 
@@ -277,19 +267,7 @@ impl HierarchicalParams {
     /// an opening other than that default is refused under answers other than a final gather, where it
     /// would change nothing.
     pub fn check_engine(&self, default_opening: f64) -> Result<(), SolveError> {
-        if self.reconstruction != Reconstruction::FinalGather
-            && self.gather_opening != default_opening
-        {
-            return Err(SolveError::param(
-                "gather_opening",
-                format!(
-                    "gather_opening = {} only applies to final-gather answers, and reconstruction is {}; set \
-                     reconstruction = \"final-gather\" or remove gather_opening",
-                    self.gather_opening,
-                    self.reconstruction.as_str()
-                ),
-            ));
-        }
+        self.answer.check(default_opening)?;
         if self.oracle == Oracle::Variation && self.quadrature < 2 {
             return Err(SolveError::param(
                 "quadrature",
@@ -332,7 +310,7 @@ mod tests {
         assert_eq!(p.oracle, Oracle::Variation);
         assert_eq!(p.schedule, Schedule::TwoStage);
         assert_eq!(p.min_element_size, Some(0.5));
-        assert_eq!(p.reconstruction, Reconstruction::Gouraud);
+        assert_eq!(p.answer.reconstruction, Reconstruction::Gouraud);
         assert_eq!(p.visibility, VisibilitySampling::Centre);
         assert_eq!(p.leaf_visibility, LeafVisibility::Link);
         assert_eq!(p.leaf_visibility.sampling(), None);
@@ -365,7 +343,7 @@ mod tests {
         // An opening changes only a final gather's answers: refused under the others, naming the fix.
         let e = HierarchicalParams::from_pairs(&[
             ("reconstruction".into(), "constant".into()),
-            ("gather_opening".into(), "0.25".into()),
+            ("gather_opening".into(), "0.1".into()),
         ])
         .expect_err("refused")
         .to_string();
@@ -373,9 +351,9 @@ mod tests {
             e.contains("gather_opening") && e.contains("final-gather"),
             "{e}"
         );
-        let p = HierarchicalParams::from_pairs(&[("gather_opening".into(), "0.25".into())])
+        let p = HierarchicalParams::from_pairs(&[("gather_opening".into(), "0".into())])
             .expect("a final gather's opening");
-        assert_eq!(p.gather_opening, 0.25);
+        assert_eq!(p.answer.gather_opening, 0.0);
     }
 
     #[test]

@@ -45,8 +45,7 @@ impl<'a> HierarchicalSolver<'a> {
         )
         .with_leaf_visibility(params.leaf_visibility)
         .with_open_shares(scene);
-        let output = SurfaceOutput::new(params.reconstruction, seed)
-            .with_gather_opening(params.gather_opening);
+        let output = SurfaceOutput::new(&params.answer, seed);
         let engine = Engine::new(roots, kernel, params, min_size)?;
         Ok(Self {
             scene,

@@ -12,7 +12,10 @@ use radlab_visibility::Accel;
 /// The defaults, answering points with the leaves' own values (`constant`): what these tests compare.
 fn leaf_params() -> HierarchicalParams {
     HierarchicalParams {
-        reconstruction: Reconstruction::Constant,
+        answer: radlab_answer::AnswerParams {
+            reconstruction: Reconstruction::Constant,
+            ..radlab_answer::AnswerParams::default()
+        },
         ..HierarchicalParams::default()
     }
 }
@@ -96,7 +99,10 @@ fn furnace_cube_and_sphere_give_e_over_one_minus_rho() {
             ] {
                 let p = HierarchicalParams {
                     oracle,
-                    reconstruction,
+                    answer: radlab_answer::AnswerParams {
+                        reconstruction,
+                        ..radlab_answer::AnswerParams::default()
+                    },
                     epsilon: 0.01,
                     min_element_size: Some(scene.diagonal() / 30.0),
                     visibility: radlab_kernels::form_factor::VisibilitySampling::Jittered2x2,
@@ -198,7 +204,10 @@ fn error_against_matrix_falls_as_epsilon_shrinks() {
     // reconstruction.
     let mp = radlab_matrix::MatrixParams {
         element_size: Some(h),
-        reconstruction: radlab_answer::Reconstruction::Constant,
+        answer: radlab_answer::AnswerParams {
+            reconstruction: radlab_answer::Reconstruction::Constant,
+            ..radlab_answer::AnswerParams::default()
+        },
         ..radlab_matrix::MatrixParams::default()
     };
     let mut m = radlab_matrix::MatrixSolver::new(&scene, &accel, mp, 5).expect("matrix");
@@ -625,7 +634,10 @@ fn radiosity_at_finds_each_leaf_and_gouraud_is_continuous() {
         &scene,
         &accel,
         HierarchicalParams {
-            reconstruction: Reconstruction::Constant,
+            answer: radlab_answer::AnswerParams {
+                reconstruction: Reconstruction::Constant,
+                ..radlab_answer::AnswerParams::default()
+            },
             ..HierarchicalParams::coarse()
         },
     );
@@ -643,7 +655,10 @@ fn radiosity_at_finds_each_leaf_and_gouraud_is_continuous() {
         &scene,
         &accel,
         HierarchicalParams {
-            reconstruction: Reconstruction::Gouraud,
+            answer: radlab_answer::AnswerParams {
+                reconstruction: Reconstruction::Gouraud,
+                ..radlab_answer::AnswerParams::default()
+            },
             ..HierarchicalParams::coarse()
         },
     );

@@ -42,6 +42,7 @@
 //! | `quadrature` | 2 | receiver points per axis (1..=16) |
 //! | `memory_budget_mib` | 2048 | refuse problems whose matrix and vectors exceed this |
 //! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` |
+//! | `gather_opening` | 0.25 | final-gather only: far groups of elements through one drawn element each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every element |
 //!
 //! ## Cost
 //! n elements: **O(n²) memory** (8 n² bytes: about 8 MB at n = 1,000, 800 MB at n = 10,000) and **O(n²)

@@ -2,9 +2,9 @@
 //! pairs (`--set iteration=conjugate-gradient`) or a TOML table through [`MethodParams`]; every error names
 //! the parameter.
 
-use radlab_answer::Reconstruction;
+use radlab_answer::{AnswerParams, Reconstruction};
 use radlab_kernels::form_factor::VisibilitySampling;
-use radlab_method::MethodParams;
+use radlab_method::{MethodParams, SolveError};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -66,12 +66,9 @@ pub struct MatrixParams {
     /// allocating.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub memory_budget_mib: f64,
-    /// How radiosity at a point is answered from the element values: constant, gouraud (vertex-interpolated)
-    /// or final-gather (one more gather with exact point-to-polygon factors and rays, charged to answering).
-    ///
-    /// See [`radlab_answer::reconstruction`]; a final gather costs rays per query, so images of large meshes
-    /// are slow.
-    pub reconstruction: Reconstruction,
+    /// How points are answered: reconstruction and gather_opening, declared once in radlab-answer.
+    #[serde(flatten)]
+    pub answer: AnswerParams,
 }
 
 /// Default reconstruction of point answers, chosen by measurement (see the crate documentation).
@@ -87,12 +84,20 @@ impl Default for MatrixParams {
             visibility: VisibilitySampling::Jittered4x4,
             quadrature: DEFAULT_QUADRATURE,
             memory_budget_mib: DEFAULT_MEMORY_BUDGET_MIB,
-            reconstruction: DEFAULT_RECONSTRUCTION,
+            answer: AnswerParams {
+                reconstruction: DEFAULT_RECONSTRUCTION,
+                ..AnswerParams::default()
+            },
         }
     }
 }
 
-impl MethodParams for MatrixParams {}
+impl MethodParams for MatrixParams {
+    /// An opening other than the default is refused under answers other than a final gather.
+    fn check_combination(&self) -> Result<(), SolveError> {
+        self.answer.check(Self::default().answer.gather_opening)
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -154,10 +159,17 @@ mod tests {
     #[test]
     fn defaults_are_listed() {
         let d = MatrixParams::declarations();
-        for name in ["iteration", "tolerance", "quadrature", "visibility"] {
+        for name in [
+            "iteration",
+            "tolerance",
+            "quadrature",
+            "visibility",
+            "reconstruction",
+            "gather_opening",
+        ] {
             assert!(d.iter().any(|p| p.name == name), "{name} missing: {d:?}");
         }
         let decls = MatrixParams::declarations();
-        assert_eq!(decls.len(), 8);
+        assert_eq!(decls.len(), 9);
     }
 }

@@ -152,7 +152,7 @@ impl<'a> MatrixSolver<'a> {
             iterations: 0,
             residual: None,
             hit_cap: false,
-            output: Reconstructor::new(params.reconstruction, seed),
+            output: Reconstructor::of(&params.answer, seed),
             params,
         })
     }

@@ -49,12 +49,13 @@
 //!
 //! | parameter | default | meaning |
 //! |---|---|---|
-//! | `element_size` | diagonal/20 | element edge length (scene units) |
+//! | `element_size` | diagonal/25 | element edge length (scene units) |
 //! | `particles_per_step` | 100000 | particles shot from the emitters per step |
 //! | `max_steps` | 100 | steps before `Converged` |
 //! | `method` | `random-walk` | `random-walk` (collision-shooting walks) or `stochastic-jacobi` |
 //! | `max_depth` | 100000 | cap on bounces (walks) or generations (Jacobi) |
-//! | `reconstruction` | `gouraud` | point answers: `constant`, `gouraud` or `final-gather` (radlab_answer::reconstruction) |
+//! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (radlab_answer::reconstruction) |
+//! | `gather_opening` | 0.25 | final-gather only: far groups of elements through one drawn element each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every element |
 //!
 //! **Cost**: O(particles × 1/(1 − ρ̄)) rays, independent of the number of element pairs (no form factors);
 //! memory O(elements). **Does badly**: small or dimly lit elements receive few particles and stay noisy

@@ -41,7 +41,7 @@
 
 use glam::DVec3;
 use radlab_answer::{
-    ElementMesh, Reconstruction, Reconstructor, element_size, gouraud::ElementValue,
+    AnswerParams, ElementMesh, Reconstructor, element_size, gouraud::ElementValue,
 };
 use radlab_kernels::open_fraction::{SEAL_GAP_REL, hit_closes, open_fractions};
 use radlab_method::{MethodParams, Solution, SolveError, Solver, Stats, Step};
@@ -98,12 +98,9 @@ pub struct McRadiosityParams {
     /// ends walks without bias, the cap only guards against runaway walks.
     #[schemars(range(min = 1))]
     pub max_depth: u32,
-    /// How radiosity at a point is answered from the element values: constant, gouraud or final-gather (one
-    /// more gather, which averages out the elements' noise and sees which points are sealed, charged to
-    /// answering).
-    ///
-    /// The default final gather was chosen by measurement (docs/methods.md gives the figures).
-    pub reconstruction: Reconstruction,
+    /// How points are answered: reconstruction and gather_opening, declared once in radlab-answer.
+    #[serde(flatten)]
+    pub answer: AnswerParams,
 }
 
 impl Default for McRadiosityParams {
@@ -114,12 +111,19 @@ impl Default for McRadiosityParams {
             max_steps: 100,
             method: McMethod::RandomWalk,
             max_depth: DEFAULT_MAX_DEPTH,
-            reconstruction: Reconstruction::FinalGather,
+            // The final gather, chosen by measurement (docs/methods.md gives the figures): it averages out
+            // the elements' noise and sees which points are sealed.
+            answer: AnswerParams::default(),
         }
     }
 }
 
-impl MethodParams for McRadiosityParams {}
+impl MethodParams for McRadiosityParams {
+    /// An opening other than the default is refused under answers other than a final gather.
+    fn check_combination(&self) -> Result<(), SolveError> {
+        self.answer.check(Self::default().answer.gather_opening)
+    }
+}
 
 /// What the particle estimators share: the mesh, where particles start, and how they fly.
 pub(crate) struct Transport<'a> {
@@ -269,7 +273,7 @@ impl<'a> McRadiositySolver<'a> {
             .iter()
             .map(|el| scene.emission(el.face as FaceId))
             .collect();
-        let reconstruction = params.reconstruction;
+        let output = Reconstructor::of(&params.answer, seed);
         let n = mesh.len();
         Ok(Self {
             accel,
@@ -278,7 +282,7 @@ impl<'a> McRadiositySolver<'a> {
             solution: MeshSolution {
                 scene,
                 accel,
-                output: Reconstructor::new(reconstruction, seed),
+                output,
                 open: vec![1.0; mesh.len()],
                 mesh,
                 radiosity,

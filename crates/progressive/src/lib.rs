@@ -51,6 +51,7 @@
 //! | `memory_budget_mib` | 2048 | refuse meshes and refinements needing more |
 //! | `overshoot` | `ambient` | `none` (plain Southwell shooting) or `ambient` (overshooting, see above) |
 //! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (see below) |
+//! | `gather_opening` | 0.25 | final-gather only: far groups of elements through one drawn element each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every element |
 //!
 //! **Point answers** (`reconstruction`, radlab_answer::reconstruction): `constant` is the element's value (plus the
 //! ambient term when on); `gouraud` interpolates vertex values over each face's leaf elements, anchoring the

@@ -5,7 +5,7 @@
 //! alike. The adaptive threshold is a relative radiosity contrast and the stopping rule a fraction of the
 //! emitted power, so neither depends on the scene's scale or on its light's strength.
 
-use radlab_answer::{Reconstruction, element_size};
+use radlab_answer::{AnswerParams, Reconstruction, element_size};
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
 use radlab_scene::Scene;
@@ -101,12 +101,9 @@ pub struct ProgressiveParams {
     ///
     /// Ambient overshooting needs far fewer shots at high reflectance (see the crate documentation).
     pub overshoot: Overshoot,
-    /// How radiosity at a point is answered from the element values: constant, gouraud (vertex-interpolated)
-    /// or final-gather (one more gather with exact point-to-polygon factors and rays, charged to answering).
-    ///
-    /// See `radlab_answer::reconstruction`; a final gather costs rays per query, so images of large meshes are
-    /// slow.
-    pub reconstruction: Reconstruction,
+    /// How points are answered: reconstruction and gather_opening, declared once in radlab-answer.
+    #[serde(flatten)]
+    pub answer: AnswerParams,
 }
 
 /// Default reconstruction of point answers, chosen by measurement (see the crate documentation).
@@ -129,7 +126,10 @@ impl Default for ProgressiveParams {
             ambient: false,
             memory_budget_mib: DEFAULT_MEMORY_BUDGET_MIB,
             overshoot: Overshoot::default(),
-            reconstruction: DEFAULT_RECONSTRUCTION,
+            answer: AnswerParams {
+                reconstruction: DEFAULT_RECONSTRUCTION,
+                ..AnswerParams::default()
+            },
         }
     }
 }
@@ -197,7 +197,12 @@ impl ProgressiveParams {
     }
 }
 
-impl MethodParams for ProgressiveParams {}
+impl MethodParams for ProgressiveParams {
+    /// An opening other than the default is refused under answers other than a final gather.
+    fn check_combination(&self) -> Result<(), SolveError> {
+        self.answer.check(Self::default().answer.gather_opening)
+    }
+}
 
 #[cfg(test)]
 mod tests {

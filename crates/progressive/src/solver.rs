@@ -13,7 +13,7 @@ use glam::DVec3;
 use std::sync::OnceLock;
 
 use radlab_answer::gouraud::ElementValue;
-use radlab_answer::{Reconstruction, Reconstructor};
+use radlab_answer::{AnswerParams, Reconstruction, Reconstructor};
 use radlab_method::{Solution, SolveError, Solver, Stats, Step};
 use radlab_scene::{FaceId, Polygon, Rgb, Scene};
 use radlab_visibility::Accel;
@@ -169,7 +169,7 @@ impl<'a> ProgressiveSolver<'a> {
             elements_split: 0,
             work: Work::default(),
             stop: None,
-            output: Output::new(params.reconstruction, seed),
+            output: Output::new(&params.answer, seed),
             open_estimated: false,
             params,
         };
@@ -366,7 +366,7 @@ impl Solver for ProgressiveSolver<'_> {
     }
 
     fn solution(&self) -> &dyn Solution {
-        match self.params.reconstruction {
+        match self.params.answer.reconstruction {
             Reconstruction::Constant => &self.solution,
             _ => self,
         }
@@ -458,9 +458,9 @@ struct Output {
 }
 
 impl Output {
-    fn new(kind: Reconstruction, seed: u64) -> Self {
+    fn new(params: &AnswerParams, seed: u64) -> Self {
         Self {
-            reconstructor: Reconstructor::new(kind, seed),
+            reconstructor: Reconstructor::of(params, seed),
             leaf_position: OnceLock::new(),
         }
     }

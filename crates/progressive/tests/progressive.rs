@@ -542,7 +542,10 @@ fn radiosity_at_finds_the_element_and_never_panics() {
         element_size: Some(0.1),
         max_shots: Some(10),
         adaptive_threshold: 0.15,
-        reconstruction: Reconstruction::Constant,
+        answer: radlab_answer::AnswerParams {
+            reconstruction: Reconstruction::Constant,
+            ..radlab_answer::AnswerParams::default()
+        },
         ..Default::default()
     };
     let mut s = ProgressiveSolver::new(&scene, &accel, params, 1).expect("solver");
@@ -606,7 +609,10 @@ fn final_gather_is_exact_for_direct_light_anywhere_and_gouraud_is_continuous() {
     for reconstruction in [Reconstruction::FinalGather, Reconstruction::Gouraud] {
         let params = ProgressiveParams {
             element_size: Some(0.2),
-            reconstruction,
+            answer: radlab_answer::AnswerParams {
+                reconstruction,
+                ..radlab_answer::AnswerParams::default()
+            },
             ..Default::default()
         };
         let mut s = ProgressiveSolver::new(&scene, &accel, params, 1).expect("solver");

@@ -23,6 +23,7 @@
 //! | `min_cell` | 1/256 of the diagonal | smallest leaf (scene units): splits stop at half an edge below it |
 //! | `max_depth` | 100000 | reflections cap per particle |
 //! | `reconstruction` | gouraud | `constant`, `gouraud` or `final-gather` |
+//! | `gather_opening` | 0.25 | final-gather only: far groups of leaves through one drawn leaf each (radlab_answer::AnswerParams); 0 gathers every leaf |
 //!
 //! **Cost**: particles × about 1/(1 − ρ̄) flights (a ray each); rebuilding the rexes after each pass is
 //! O(landings × depth). Memory: 40 bytes per kept landing (its face parameters and power) and about 140 per

@@ -2,7 +2,7 @@
 //! rule for the per-face quadtrees (a particle count per leaf and a smallest cell), an optional contrast test
 //! on the split, and how points are answered (radlab-answer's reconstructions).
 
-use radlab_answer::Reconstruction;
+use radlab_answer::{AnswerParams, Reconstruction};
 use radlab_method::{MethodParams, SolveError};
 use radlab_pathtrace::DEFAULT_MAX_DEPTH;
 use schemars::JsonSchema;
@@ -67,10 +67,9 @@ pub struct RadiosityTextureParams {
     /// Cap on a particle's reflections (Russian roulette ends them).
     #[schemars(range(min = 1))]
     pub max_depth: u32,
-    /// How radiosity at a point is read from the textures: constant (the leaf's value), gouraud (vertex values
-    /// fitted to the leaves of each face, bilinear within a leaf) or final-gather (one more gather over the
-    /// leaves).
-    pub reconstruction: Reconstruction,
+    /// How points are answered: reconstruction and gather_opening, declared once in radlab-answer.
+    #[serde(flatten)]
+    pub answer: AnswerParams,
 }
 
 impl Default for RadiosityTextureParams {
@@ -82,7 +81,11 @@ impl Default for RadiosityTextureParams {
             split: SplitRule::Count,
             min_cell: None,
             max_depth: DEFAULT_MAX_DEPTH,
-            reconstruction: Reconstruction::Gouraud,
+            // Gouraud: vertex values fitted to the leaves of each face, bilinear within a leaf.
+            answer: AnswerParams {
+                reconstruction: Reconstruction::Gouraud,
+                ..AnswerParams::default()
+            },
         }
     }
 }
@@ -98,6 +101,6 @@ impl MethodParams for RadiosityTextureParams {
                 ),
             ));
         }
-        Ok(())
+        self.answer.check(Self::default().answer.gather_opening)
     }
 }

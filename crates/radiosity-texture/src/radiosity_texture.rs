@@ -190,7 +190,7 @@ impl<'a> RadiosityTextureSolver<'a> {
             leaf_index: (0..faces).map(|f| vec![f as u32]).collect(),
             leaves: faces as u64,
             rexes,
-            output: Reconstructor::new(params.reconstruction, seed),
+            output: Reconstructor::of(&params.answer, seed),
         };
         Ok(Self {
             emitters: EmitterSampler::new(scene),

@@ -140,7 +140,10 @@ fn direct_light_matches_lambert_and_refines_where_it_changes() {
         particles: 300_000,
         passes: 3,
         split_threshold: 200,
-        reconstruction: Reconstruction::Constant,
+        answer: radlab_answer::AnswerParams {
+            reconstruction: Reconstruction::Constant,
+            ..radlab_answer::AnswerParams::default()
+        },
         ..RadiosityTextureParams::default()
     };
     let s = solve(&scene, &accel, &params, 9);
@@ -272,7 +275,10 @@ fn shadow_edges_get_fine_leaves_and_sharpen_as_min_cell_shrinks() {
         split_threshold: 200,
         split,
         min_cell: Some(min_cell),
-        reconstruction: Reconstruction::Constant,
+        answer: radlab_answer::AnswerParams {
+            reconstruction: Reconstruction::Constant,
+            ..radlab_answer::AnswerParams::default()
+        },
         ..RadiosityTextureParams::default()
     };
     // Under the contrast rule the leaves are finest at the penumbra and coarse on both sides of it.

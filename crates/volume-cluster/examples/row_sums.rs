@@ -72,7 +72,7 @@ fn main() {
         }
     }
     let mut p = VolumeClusterParams::from_pairs(&pairs).expect("parameters");
-    p.engine.reconstruction = Reconstruction::Constant;
+    p.engine.answer.reconstruction = Reconstruction::Constant;
     match p.transfer {
         radlab_volume_cluster::Transfer::Alpha => {
             report::<radlab_volume_cluster::Alpha>(&scene, &accel, &p, rho)

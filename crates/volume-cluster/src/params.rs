@@ -88,7 +88,6 @@ impl Default for VolumeClusterParams {
             engine: HierarchicalParams {
                 error_norm: ErrorNorm::Power,
                 epsilon: DEFAULT_EPSILON,
-                gather_opening: DEFAULT_GATHER_OPENING,
                 ..HierarchicalParams::default()
             },
         }
@@ -97,13 +96,6 @@ impl Default for VolumeClusterParams {
 
 /// Default ε (power norm): a link may carry up to this fraction of the scene's power.
 pub const DEFAULT_EPSILON: f64 = 1e-4;
-
-/// Default opening of the final gather (`gather_opening`): far groups of leaves through one drawn leaf each
-/// (radlab-answer's final gather over its source tree). On the 10⁵-face terrain the flat gather's answering
-/// pass at 512 points took 118 s of one thread, and the method 183 s on two cores; at 0.25 it takes 103 s for
-/// the same 0.28% / 3.6%, and the suite's small rooms answer within 0.01 points of mean of the flat gather
-/// (docs/defaults.md).
-pub const DEFAULT_GATHER_OPENING: f64 = 0.25;
 
 /// Default [`VolumeClusterParams::straddle_angle`], in degrees.
 pub const DEFAULT_STRADDLE_ANGLE: f64 = 5.0;
@@ -117,7 +109,7 @@ impl MethodParams for VolumeClusterParams {
 
     fn check_combination(&self) -> Result<(), SolveError> {
         self.engine
-            .check_engine(Self::default().engine.gather_opening)
+            .check_engine(Self::default().engine.answer.gather_opening)
     }
 }
 
@@ -163,7 +155,7 @@ mod tests {
         assert_eq!(default("error_norm").as_deref(), Some("power"));
         assert_eq!(
             default("gather_opening"),
-            Some(DEFAULT_GATHER_OPENING.to_string())
+            Some(radlab_answer::DEFAULT_GATHER_OPENING.to_string())
         );
         // The opening changes only a final gather: another value under other answers is refused, naming the
         // fix; the default is not.

@@ -75,8 +75,7 @@ impl<'a, M: TransferMode> ClusterSolver<'a, M> {
         let transport = ClusterTransport::new(patches, accel, p.visibility, p.quadrature, seed)
             .with_reachable(enclosures.reachable)
             .with_straddle_cone(params.straddle_angle.to_radians());
-        let output =
-            SurfaceOutput::new(p.reconstruction, seed).with_gather_opening(p.gather_opening);
+        let output = SurfaceOutput::new(&p.answer, seed);
         let n_roots = roots.len() as u32;
         let mut engine = Engine::new(roots, transport, p, min_size)?;
         engine.expand(|n| matches!(n, ClusterNode::Cluster(_)))?;

@@ -77,7 +77,7 @@ fn a_sliver_in_a_furnace_gets_e_over_one_minus_rho() {
     // The element's own value, not a final gather's (which re-gathers with exact point-to-polygon factors
     // from the walls' B ≈ 10 and would hide the sliver's row).
     let mut params = VolumeClusterParams::default();
-    params.engine.reconstruction = radlab_answer::Reconstruction::Constant;
+    params.engine.answer.reconstruction = radlab_answer::Reconstruction::Constant;
     let mut s = VolumeClusterSolver::new(&scene, &accel, params, 1).expect("solver");
     let mut converged = false;
     for _ in 0..10_000 {

@@ -33,14 +33,14 @@ fn params(transfer: Transfer, epsilon: f64) -> VolumeClusterParams {
         ..VolumeClusterParams::default()
     };
     p.engine.epsilon = epsilon;
-    p.engine.reconstruction = Reconstruction::Constant;
+    p.engine.answer.reconstruction = Reconstruction::Constant;
     p
 }
 
 /// Linking exactly the given roots, never refining: ε too large for any link, links made once.
 fn frozen() -> VolumeClusterParams {
     let mut p = VolumeClusterParams::default();
-    p.engine.reconstruction = Reconstruction::Constant;
+    p.engine.answer.reconstruction = Reconstruction::Constant;
     p.engine.epsilon = 1e30;
     p.engine.schedule = Schedule::TwoStage;
     p.engine.visibility = VisibilitySampling::Unoccluded;

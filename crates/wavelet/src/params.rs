@@ -2,7 +2,7 @@
 //! enters a link, the quadrature, the minimum element, the schedule and how points are answered. Each is
 //! declared once (doc comment = help, `schemars` attribute = range, [`WaveletParams::default`] = default).
 
-use radlab_answer::Reconstruction;
+use radlab_answer::{AnswerParams, Reconstruction};
 use radlab_hierarchical::{
     ErrorNorm, Gather, HierarchicalParams, LeafVisibility, Oracle, Schedule,
 };
@@ -169,7 +169,7 @@ impl WaveletParams {
             tolerance: self.tolerance,
             max_steps: self.max_steps,
             gather: Gather::Link,
-            reconstruction: self.reconstruction.answer(),
+            answer: self.reconstruction.answer(),
             memory_budget_mib: self.memory_budget_mib,
             ..HierarchicalParams::default()
         }
@@ -177,13 +177,17 @@ impl WaveletParams {
 }
 
 impl WaveletReconstruction {
-    /// The shared answering layer's reconstruction: basis answers go through the leaf's point evaluation
-    /// (the layer's `constant`, which reads [`radlab_hierarchical::Engine::radiosity_at_leaf`]).
-    pub fn answer(self) -> Reconstruction {
-        match self {
-            Self::Basis => Reconstruction::Constant,
-            Self::Smoothed => Reconstruction::Gouraud,
-            Self::FinalGather => Reconstruction::FinalGather,
+    /// The shared answering layer's parameters: basis answers go through the leaf's point evaluation (the
+    /// layer's `constant`, which reads [`radlab_hierarchical::Engine::radiosity_at_leaf`]); a final gather
+    /// goes over every leaf.
+    pub fn answer(self) -> AnswerParams {
+        AnswerParams {
+            reconstruction: match self {
+                Self::Basis => Reconstruction::Constant,
+                Self::Smoothed => Reconstruction::Gouraud,
+                Self::FinalGather => Reconstruction::FinalGather,
+            },
+            gather_opening: 0.0,
         }
     }
 }

@@ -116,7 +116,7 @@ impl<'a> WaveletSolver<'a> {
             scene,
             accel,
             engines,
-            output: SurfaceOutput::new(params.reconstruction.answer(), seed),
+            output: SurfaceOutput::new(&params.reconstruction.answer(), seed),
             rays: 0,
             seed,
         })
