@@ -74,7 +74,7 @@ pub struct AnswerParams {
 /// through one drawn element each ([`crate::final_gather`] over its source tree). On the 10⁵-face terrain volume
 /// clusters' answering pass at 512 points took 118 s of one thread flat, and the method 183 s on two cores; at
 /// 0.25 it takes 103 s for the same 0.28% / 3.6%. On the suite's small rooms matrix, progressive, hierarchical,
-/// volume-cluster and mesh Monte Carlo answers move by at most 0.02 points of mean error, for 5–49% fewer
+/// volume-cluster and mesh Monte Carlo answers move by at most 0.02 points of mean error, for 5–75% fewer
 /// kernel evaluations; mesh Monte Carlo radiosity converges on the 52k-face elephant room within the suite's
 /// time, where the flat gather's answering passes had it killed (docs/defaults.md).
 pub const DEFAULT_GATHER_OPENING: f64 = 0.25;
