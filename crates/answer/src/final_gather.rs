@@ -92,6 +92,24 @@
 //! above, and a near source's far part B_far is gathered over the same tree at its centroid, its near set
 //! left out, unless the caller supplies a [`FarField`]. A point beside a gap still gathers every source.
 //!
+//! Near values ([`FinalGather::with_near_values`], parameter `near_values`). An element's value carries the
+//! solution's error: a cluster's irradiance handed to its faces by their orientation alone, a link's one
+//! visibility fraction, a mesh's element mean. Far from the query point the gather's small factors damp it,
+//! but an element near the point passes it on nearly whole: the floor under a scanned dragon, which sees mostly
+//! its underside, answered 19% bright from volume clusters' values there. So an element the gather takes one
+//! by one (not through a far group) whose centroid lies within [`NEAR_VALUES_REACH`] of its diameters from the
+//! point, but outside its near field, is read at its value gathered once more at its centroid, E + ρ Σ F V B
+//! over the solution's values (this gather, with its own near field and far groups), computed at its first
+//! use and kept: two bounces near the point and one far from it, a local Jacobi step (Cohen & Wallace 1993,
+//! ch. 5) for a gather per element some query comes near. A centroid the seal test finds sealed or beside a
+//! gap (where a gather measures every source with 16 rays), an element with a sealed part (its value is its
+//! open part's mean) and an emitter keep their values. Not the default: a polygon soup's 20,000 intersecting
+//! triangles put many elements near every point, and volume clusters' answering passes there took 5 times as
+//! long, so the run no longer answered within its time (docs/methods.md, "Near values"). Inside the near
+//! field the sub-polygons' values stay centred on the solution's value (above): centred on the re-gathered
+//! one instead, the Cornell box's points on the short block's face a millimetre above the floor moved from
+//! +18% and +39% to +21% and +16% (matrix), mixed.
+//!
 //! Cost per query: the seal test's rays (one for most open points), one kernel evaluation per source element
 //! in front of the point (at θ > 0: per source of an open group, and one per far group, with one ray) and 16
 //! per near source, plus their rays (a point beside a gap: 16 rays and 16 more kernel evaluations per far
@@ -131,6 +149,19 @@ pub const NEAR_SET: f64 = 1.55;
 /// The smallest share of a hemisphere the far part's radiosity is spread over (a guard against dividing by a
 /// vanishing remainder when the near set fills a centroid's view).
 const MIN_FAR_SHARE: f64 = 0.05;
+
+/// Near values ([`FinalGather::with_near_values`]): an element taken one by one whose centroid lies closer to the
+/// query point than this multiple of its diameter is read at its value gathered once more at its centroid. At
+/// the default opening (0.25) the gather takes one by one the elements of groups it opens, which lie within
+/// a few of their diameters; at opening 0 the reach keeps the re-gathers to the elements around the query
+/// points. Face clusters' worst point on the dragon room was 16.6% at 1 diameter, 13.1% at 4 and at 16
+/// (docs/methods.md, "Near values").
+pub const NEAR_VALUES_REACH: f64 = 4.0;
+
+/// Whether `point` lies within [`NEAR_VALUES_REACH`] of `polygon`'s diameters from its centroid.
+pub fn within_near_values_reach(point: DVec3, polygon: &Polygon) -> bool {
+    point.distance(polygon.centroid()) < NEAR_VALUES_REACH * polygon.diameter()
+}
 
 /// The largest share of a point's estimated light (unoccluded, [`crate::source_tree`]) a far group of sources
 /// may hold and be gathered through one drawn source; a brighter group is opened. On a finely meshed Cornell
@@ -400,6 +431,9 @@ pub struct FinalGather {
     reach: Vec<Reach>,
     /// Per source, its near-field sub-polygons with their radiosities, computed at the first near query.
     near: Vec<OnceLock<NearValues>>,
+    /// Per source, its value gathered once more at its centroid, at its first use ([`FinalGather::with_near_values`]);
+    /// empty when near sources are read at their solution values.
+    regathered: Vec<OnceLock<Rgb>>,
     settings: GatherSettings,
     /// Which groups of sources are far: the opening θ of [`FinalGather::with_opening`] (0: none, the flat
     /// gather) and the largest share of a point's light a far group may hold ([`GROUP_SHARE`]).
@@ -421,6 +455,7 @@ impl FinalGather {
             .collect::<Vec<_>>();
         Self {
             near: (0..sources.len()).map(|_| OnceLock::new()).collect(),
+            regathered: Vec::new(),
             reach: sources.iter().map(|(e, _)| Reach::of(&e.polygon)).collect(),
             sources,
             settings,
@@ -440,6 +475,14 @@ impl FinalGather {
     /// gathers every source.
     pub fn with_opening(self, opening: f64) -> Self {
         self.with_groups(opening, GROUP_SHARE)
+    }
+
+    /// The same gather reading each source it takes one by one within [`NEAR_VALUES_REACH`] of the point (outside
+    /// its near field; not an emitter, nor a source with a sealed part) at its value gathered once more at its
+    /// centroid, computed at its first use (module documentation, "Near values").
+    pub fn with_near_values(mut self) -> Self {
+        self.regathered = (0..self.sources.len()).map(|_| OnceLock::new()).collect();
+        self
     }
 
     /// [`FinalGather::with_opening`] with far groups holding at most `share` of a point's estimated light.
@@ -492,6 +535,7 @@ impl FinalGather {
                 .filter_map(|n| n.get())
                 .map(|v| v.len() * size_of::<(Polygon, [(DVec3, Rgb); 4])>())
                 .sum::<usize>()
+            + self.regathered.capacity() * size_of::<OnceLock<Rgb>>()
             + self.tree.as_ref().map_or(0, SourceTree::bytes)
     }
 
@@ -535,6 +579,7 @@ impl FinalGather {
                 accel,
                 (face, point, in_gap),
                 far,
+                !self.regathered.is_empty(),
                 &mut rays,
                 &mut kernels,
             )
@@ -775,12 +820,14 @@ impl FinalGather {
 
     /// E(x) + ρ(x) Σ_j F V B_j at `point` on `face`, near sources through their near field (see the module
     /// documentation); its rays and kernel evaluations are added to the two counters.
+    #[allow(clippy::too_many_arguments)]
     fn gather(
         &self,
         scene: &Scene,
         accel: &Accel,
         (face, point, in_gap): (FaceId, DVec3, bool),
         far: Option<&dyn FarField>,
+        near_values: bool,
         rays: &mut u64,
         kernels: &mut u64,
     ) -> Rgb {
@@ -792,7 +839,7 @@ impl FinalGather {
         }
         let key = query_key(scene, face, point);
         let mut sum = Rgb::ZERO;
-        let query = (face, point, n, in_gap);
+        let query = (face, point, n, in_gap, near_values);
         match &self.tree {
             // A point in or beside a gap measures every source's share with its own rays.
             Some(tree) if !in_gap => {
@@ -823,13 +870,14 @@ impl FinalGather {
     }
 
     /// Adds F V B_j of source `j` at the query point (`query`: face, point, its normal, whether it lies beside
-    /// a gap) to `sum`, through its near field where the point is near it (see the module documentation).
+    /// a gap, whether near values apply) to `sum`, through its near field where the point is near it, at its
+    /// re-gathered value where it is within reach of those (see the module documentation).
     #[allow(clippy::too_many_arguments)]
     fn add_source(
         &self,
         scene: &Scene,
         accel: &Accel,
-        (face, point, n, in_gap): (FaceId, DVec3, DVec3, bool),
+        (face, point, n, in_gap, near_values): (FaceId, DVec3, DVec3, bool, bool),
         key: u64,
         j: usize,
         far: Option<&dyn FarField>,
@@ -876,7 +924,56 @@ impl FinalGather {
             self.settings
                 .visible_share(accel, face, point, n, key, j as u64, src, *emits, rays)
         };
-        *sum += (f * v) * src.radiosity;
+        let b = if near_values
+            && !*emits
+            && src.open >= 1.0
+            && within_near_values_reach(point, &src.polygon)
+        {
+            *self.regathered[j].get_or_init(|| self.regathered_value(scene, accel, j, far))
+        } else {
+            src.radiosity
+        };
+        *sum += (f * v) * b;
+    }
+
+    /// Source `j`'s value gathered once more at its centroid over the solution's values (near values, module
+    /// documentation), or its own value where the centroid is sealed (under a block, where a gather would
+    /// read the light the solution sent into the gap). Its rays and kernel evaluations are the gather's.
+    fn regathered_value(
+        &self,
+        scene: &Scene,
+        accel: &Accel,
+        j: usize,
+        far: Option<&dyn FarField>,
+    ) -> Rgb {
+        let src = &self.sources[j].0;
+        let c = src.polygon.centroid();
+        let (sealed, mut rays) = point_sealed(
+            scene,
+            accel,
+            src.face,
+            c,
+            POINT_SEAL_RAYS,
+            self.settings.seed,
+            query_key(scene, src.face, c),
+        );
+        let mut kernels = 0;
+        let b = if sealed || rays > 1 {
+            src.radiosity
+        } else {
+            self.gather(
+                scene,
+                accel,
+                (src.face, c, false),
+                far,
+                false,
+                &mut rays,
+                &mut kernels,
+            )
+        };
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+        self.kernels.fetch_add(kernels, Ordering::Relaxed);
+        b
     }
 
     /// F̃ V B_j / q of source `j`, drawn with probability `q` from a far group, at `point` on `face` (normal
@@ -1451,6 +1548,56 @@ mod tests {
         );
     }
 
+    /// Near values are a second gather of the sources near the point: inside a closed sphere of ρ = 0.5 with
+    /// no emission and every element given B₀ = 1, a near-field source's sub-polygon values are 1 (T(q) = 1
+    /// at every q: the inside's factors sum to one), a source outside its near field but within
+    /// [`NEAR_VALUES_REACH`] of its diameters is read at its re-gathered ρ B₀ = 0.5, and every other at 1; so
+    /// the flat gather answers B(x) = 0.5 (1 − 0.5 Σ_regathered F_{x→j}), Baum's exact factors (1e-9), below
+    /// one gather's 0.5 wherever some source is re-gathered. The values are kept: a second pass over the same
+    /// queries costs what a second pass without near values costs.
+    #[test]
+    fn near_values_read_the_sources_near_the_point_gathered_once_more() {
+        let scene =
+            builtin("furnace-sphere?tessellation=6&reflectance=0.5&emission=0").expect("scene");
+        let accel = Accel::new(&scene);
+        let els: Vec<ElementValue> = (0..scene.face_count())
+            .map(|f| whole_face(&scene, f))
+            .collect();
+        let plain = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
+        let near = FinalGather::new(&scene, &els, GatherSettings::with_seed(3)).with_near_values();
+        let queries: Vec<usize> = (0..scene.face_count()).step_by(7).collect();
+        let mut below = 0;
+        for &f in &queries {
+            let (x, n) = (scene.faces[f].centroid, scene.faces[f].normal);
+            let regathered: f64 = els
+                .iter()
+                .filter(|e| {
+                    e.face != f
+                        && !Reach::of(&e.polygon).holds(&e.polygon, x)
+                        && within_near_values_reach(x, &e.polygon)
+                })
+                .map(|e| point_polygon(x, n, &e.polygon))
+                .sum();
+            let want = 0.5 * (1.0 - 0.5 * regathered);
+            let b = near.radiosity_at(&scene, &accel, f, x).x;
+            assert!((b - want).abs() <= 1e-9, "face {f}: {b} vs {want}");
+            below += usize::from(b < 0.5 - 1e-6);
+            plain.radiosity_at(&scene, &accel, f, x);
+        }
+        assert_eq!(below, queries.len(), "every query has sources to re-gather");
+        let (near_first, plain_first) = (near.kernel_evaluations(), plain.kernel_evaluations());
+        for &f in &queries {
+            let x = scene.faces[f].centroid;
+            near.radiosity_at(&scene, &accel, f, x);
+            plain.radiosity_at(&scene, &accel, f, x);
+        }
+        assert_eq!(
+            near.kernel_evaluations() - near_first,
+            plain.kernel_evaluations() - plain_first
+        );
+        assert!(near_first > plain_first, "the re-gathers are counted");
+    }
+
     #[test]
     fn counts_its_work_and_skips_its_own_face() {
         // The Cornell box with its faces as elements, B = 1 on every one; a point on the first face near an
@@ -1669,14 +1816,18 @@ mod tests {
         );
     }
 
+    /// The same answers, rays and kernel evaluations whichever order the queries come in, at opening 0 and
+    /// 0.3, with near values read from the solution and re-gathered (each computed at its first use).
     #[test]
     fn answers_do_not_depend_on_the_order_of_queries() {
         for opening in [0.0, 0.3] {
-            answers_do_not_depend_on_the_order_of_queries_at(opening);
+            for near_values in [false, true] {
+                answers_do_not_depend_on_the_order_of_queries_at(opening, near_values);
+            }
         }
     }
 
-    fn answers_do_not_depend_on_the_order_of_queries_at(opening: f64) {
+    fn answers_do_not_depend_on_the_order_of_queries_at(opening: f64, near_values: bool) {
         let scene = builtin("cornell").expect("cornell");
         let accel = Accel::new(&scene);
         let mesh = ElementMesh::new(&scene, 110.0);
@@ -1691,10 +1842,12 @@ mod tests {
                 [(f, poly.point_at(0.02, 0.5)), (f, poly.point_at(0.5, 0.97))]
             })
             .collect();
-        let forward =
-            FinalGather::new(&scene, &els, GatherSettings::with_seed(5)).with_opening(opening);
-        let backward =
-            FinalGather::new(&scene, &els, GatherSettings::with_seed(5)).with_opening(opening);
+        let gather = || {
+            let g =
+                FinalGather::new(&scene, &els, GatherSettings::with_seed(5)).with_opening(opening);
+            if near_values { g.with_near_values() } else { g }
+        };
+        let (forward, backward) = (gather(), gather());
         let a: Vec<Rgb> = points
             .iter()
             .map(|&(f, p)| forward.radiosity_at(&scene, &accel, f, p))

@@ -18,5 +18,7 @@ mod source_tree;
 
 pub use elements::{Element, ElementMesh, default_element_size, element_size};
 pub use locate::{ElementLocator, ElementTree};
-pub use reconstruction::{AnswerParams, DEFAULT_GATHER_OPENING, Reconstruction, Reconstructor};
+pub use reconstruction::{
+    AnswerParams, DEFAULT_GATHER_OPENING, NearValues, Reconstruction, Reconstructor,
+};
 pub use render::{Image, render_solution};

@@ -28,9 +28,10 @@
 //! the three answers and the default, chosen by the worst scenes of the defaults suite, where Gouraud answers
 //! smear light across shadow edges. Its cost shows in `radlab solve`, which answers 16 points a face for its
 //! face table and every corner of its mesh: millions of gathers at 10⁶ faces, where Gouraud answers cost
-//! seconds. With
-//! `gather_values = "gathered"` the values it reads are themselves gathered first, at every face's centroid
-//! (a second bounce: [`crate::cluster_gather`]), for k more gathers a solution, also charged to answering.
+//! seconds. With `near_values = "regathered"` the faces it gathers one by one near the point read their values
+//! gathered once more at their centroids ([`crate::cluster_gather`]), each at its first use, a gather per face
+//! some query comes near; with `gather_values = "gathered"` every face's value is gathered so first (a second
+//! bounce everywhere), for k more gathers a solution. Both are charged to answering.
 //! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-answer's shared final
 //! gather over the same values, whose near field re-gathers faces close to the point as sub-polygons
 //! ([`NearField`]); its rays, kernel evaluations and bytes are charged to answering as well.
@@ -55,7 +56,7 @@ use glam::DVec3;
 use radlab_answer::final_gather::{FinalGather, GatherSettings};
 use radlab_answer::gouraud::ElementValue;
 use radlab_answer::irradiance_gouraud;
-use radlab_answer::{AnswerParams, Reconstruction};
+use radlab_answer::{AnswerParams, NearValues, Reconstruction};
 use radlab_hierarchical::{
     Engine, ErrorNorm, HierarchicalParams, LinearState, NodeKind, PatchKernel, SurfaceOutput,
 };
@@ -124,9 +125,9 @@ pub struct FaceClusterSolveParams {
     /// more rays, less noise, for setup time linear in the faces.
     #[schemars(range(min = 1, max = 1024))]
     pub self_rays: u32,
-    /// Final-gather only: the values the gather reads: solution (the solution's constant answers) or gathered
-    /// (each face's value gathered first over the tree at values_opening: a second bounce, charged to
-    /// answering). See [`GatherValues`].
+    /// Final-gather only: the values the gather reads: solution (the solution's constant answers, with the
+    /// faces near the point re-gathered as `near_values` asks) or gathered (every face's value gathered first
+    /// over the tree at values_opening: a second bounce, charged to answering). See [`GatherValues`].
     pub gather_values: GatherValues,
     /// gather_values = "gathered" only: the values' gather's opening.
     #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
@@ -173,7 +174,7 @@ impl MethodParams for FaceClusterSolveParams {
 
     fn check_combination(&self) -> Result<(), SolveError> {
         let d = Self::default();
-        self.engine.check_engine(d.engine.answer.gather_opening)?;
+        self.engine.check_engine(&d.engine.answer)?;
         // Visibility segments join the two ends' representative points (a hierarchy's samples per node, four
         // points of a patch): more rays than point pairs would repeat segments.
         let points = FaceClusterParams::default().samples_per_node.min(4);
@@ -269,6 +270,8 @@ pub struct FaceClusterSolver<'a> {
     gather: OnceLock<ClusterGather>,
     /// Where the final gather's values come from.
     gather_values: GatherValues,
+    /// What the final gather reads for faces near the point, over the solution's values.
+    near_values: NearValues,
     /// The values' gather's opening under [`GatherValues::Gathered`].
     values_opening: f64,
     /// How the flat final gather takes near faces.
@@ -359,7 +362,7 @@ impl<'a> FaceClusterSolver<'a> {
                 } else {
                     p.answer.reconstruction
                 },
-                gather_opening: 0.0,
+                ..AnswerParams::final_gather(0.0)
             },
             seed,
         );
@@ -386,6 +389,7 @@ impl<'a> FaceClusterSolver<'a> {
             gather_opening,
             gather: OnceLock::new(),
             gather_values: params.gather_values,
+            near_values: params.engine.answer.near_values,
             values_opening: params.values_opening,
             near_field: params.near_field,
             flat: OnceLock::new(),
@@ -632,7 +636,11 @@ impl<'a> FaceClusterSolver<'a> {
                 .collect();
             match self.gather_values {
                 GatherValues::Solution => {
-                    ClusterGather::new(&self.ctx, values, patches, opening, self.seed)
+                    let gather = ClusterGather::new(&self.ctx, values, patches, opening, self.seed);
+                    match self.near_values {
+                        NearValues::Solution => gather,
+                        NearValues::Regathered => gather.with_near_values(),
+                    }
                 }
                 GatherValues::Gathered => ClusterGather::regathered(
                     &self.ctx,

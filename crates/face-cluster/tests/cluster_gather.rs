@@ -11,11 +11,13 @@ use common::{params, solve, try_params};
 use std::collections::HashMap;
 
 use glam::dvec3;
+use radlab_answer::final_gather::within_near_values_reach;
 use radlab_face_cluster::{
     ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
     FaceContext, GatherValues, NearField,
 };
 use radlab_kernels::form_factor::closed_form::point_to_parallel_rectangle_corner as corner;
+use radlab_kernels::form_factor::point_polygon;
 use radlab_method::{MethodParams, Solution};
 use radlab_scene::{Material, Rgb, Scene, SceneBuilder, builtin};
 use radlab_visibility::Accel;
@@ -166,6 +168,62 @@ fn gathered_values_are_one_jacobi_iteration_and_their_work_is_counted() {
         );
         assert!((b1 - 1.5).abs() <= 1e-9, "face {f}: one gather {b1}");
         assert!((b2 - 1.75).abs() <= 1e-9, "face {f}: two gathers {b2}");
+    }
+}
+
+/// Near values are gathered values where the query point is near: inside a closed sphere of ρ = 0.5 and no
+/// emission, with every face given the value B₀ = 1, the flat gather reads a face within `NEAR_VALUES_REACH` of
+/// its diameters from the point at its value gathered once more, ρ B₀ = 0.5 (the inside's factors sum to one),
+/// and every other face at 1, so at a face's centroid x, B = ρ (Σ_near 0.5 F + Σ_far F) = 0.5 − 0.25 Σ_near
+/// F_{x→j}, with F Baum's exact factor (1e-9). On a sphere of 12 faces every face is near every centroid: two
+/// gathers, 0.25; on one of 432 only some are, and B lies strictly between two gathers' 0.25 and one gather's
+/// 0.5. The values are gathered once, at their first use: a second pass over the same queries counts the kernel
+/// evaluations of a gather over the solution's values, and the first pass more (the re-gathers, charged to
+/// answering).
+#[test]
+fn near_values_are_a_second_gather_of_the_faces_near_the_point() {
+    for (n, every_face_near) in [(1, true), (6, false)] {
+        let scene = builtin(&format!(
+            "furnace-sphere?tessellation={n}&reflectance=0.5&emission=0"
+        ))
+        .expect("scene");
+        let accel = Accel::new(&scene);
+        let ctx = context(&scene);
+        let ones = vec![Rgb::ONE; scene.face_count()];
+        let plain = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5);
+        let near = ClusterGather::new(&ctx, ones, HashMap::new(), 0.0, 5).with_near_values();
+        let queries: Vec<usize> = (0..scene.face_count()).step_by(5).collect();
+        let mut strictly_between = 0;
+        for &f in &queries {
+            let x = scene.faces[f].centroid;
+            let n_x = scene.faces[f].normal;
+            let near_factors: f64 = (0..scene.face_count())
+                .filter(|&j| j != f)
+                .map(|j| scene.polygon(j))
+                .filter(|p| within_near_values_reach(x, p))
+                .map(|p| point_polygon(x, n_x, &p))
+                .sum();
+            let want = 0.5 - 0.25 * near_factors;
+            let b = near.radiosity_at(&ctx, &accel, f, x, false).x;
+            assert!((b - want).abs() <= 1e-9, "{n}, face {f}: {b} vs {want}");
+            if every_face_near {
+                assert!((b - 0.25).abs() <= 1e-9, "face {f}: {b}");
+            }
+            strictly_between += usize::from(b > 0.25 + 1e-6 && b < 0.5 - 1e-6);
+            plain.radiosity_at(&ctx, &accel, f, x, false);
+        }
+        if !every_face_near {
+            assert_eq!(strictly_between, queries.len());
+        }
+        let first = near.kernel_evaluations();
+        for &f in &queries {
+            near.radiosity_at(&ctx, &accel, f, scene.faces[f].centroid, false);
+        }
+        assert_eq!(
+            near.kernel_evaluations() - first,
+            plain.kernel_evaluations()
+        );
+        assert!(first > plain.kernel_evaluations());
     }
 }
 

@@ -202,7 +202,7 @@ impl HierarchicalParams {
             gather: Gather::Leaf,
             answer: AnswerParams {
                 reconstruction: DEFAULT_RECONSTRUCTION,
-                gather_opening: DEFAULT_GATHER_OPENING,
+                ..AnswerParams::final_gather(DEFAULT_GATHER_OPENING)
             },
             memory_budget_mib: 4096.0,
         }
@@ -258,16 +258,16 @@ impl Default for HierarchicalParams {
 
 impl MethodParams for HierarchicalParams {
     fn check_combination(&self) -> Result<(), SolveError> {
-        self.check_engine(Self::default_params().answer.gather_opening)
+        self.check_engine(&Self::default_params().answer)
     }
 }
 
 impl HierarchicalParams {
-    /// The checks of every method on the engine, for a method whose default opening is `default_opening`:
-    /// an opening other than that default is refused under answers other than a final gather, where it
-    /// would change nothing.
-    pub fn check_engine(&self, default_opening: f64) -> Result<(), SolveError> {
-        self.answer.check(default_opening)?;
+    /// The checks of every method on the engine, for a method whose default answers are `default`: an
+    /// opening or near values other than those defaults are refused under answers other than a final gather,
+    /// where they would change nothing.
+    pub fn check_engine(&self, default: &AnswerParams) -> Result<(), SolveError> {
+        self.answer.check(default)?;
         if self.oracle == Oracle::Variation && self.quadrature < 2 {
             return Err(SolveError::param(
                 "quadrature",

@@ -95,7 +95,7 @@ impl Default for MatrixParams {
 impl MethodParams for MatrixParams {
     /// An opening other than the default is refused under answers other than a final gather.
     fn check_combination(&self) -> Result<(), SolveError> {
-        self.answer.check(Self::default().answer.gather_opening)
+        self.answer.check(&Self::default().answer)
     }
 }
 
@@ -166,10 +166,11 @@ mod tests {
             "visibility",
             "reconstruction",
             "gather_opening",
+            "near_values",
         ] {
             assert!(d.iter().any(|p| p.name == name), "{name} missing: {d:?}");
         }
         let decls = MatrixParams::declarations();
-        assert_eq!(decls.len(), 9);
+        assert_eq!(decls.len(), 10);
     }
 }

@@ -121,7 +121,7 @@ impl Default for McRadiosityParams {
 impl MethodParams for McRadiosityParams {
     /// An opening other than the default is refused under answers other than a final gather.
     fn check_combination(&self) -> Result<(), SolveError> {
-        self.answer.check(Self::default().answer.gather_opening)
+        self.answer.check(&Self::default().answer)
     }
 }
 

@@ -101,6 +101,6 @@ impl MethodParams for RadiosityTextureParams {
                 ),
             ));
         }
-        self.answer.check(Self::default().answer.gather_opening)
+        self.answer.check(&Self::default().answer)
     }
 }

@@ -108,8 +108,7 @@ impl MethodParams for VolumeClusterParams {
     )];
 
     fn check_combination(&self) -> Result<(), SolveError> {
-        self.engine
-            .check_engine(Self::default().engine.answer.gather_opening)
+        self.engine.check_engine(&Self::default().engine.answer)
     }
 }
 

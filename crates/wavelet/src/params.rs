@@ -187,7 +187,7 @@ impl WaveletReconstruction {
                 Self::Smoothed => Reconstruction::Gouraud,
                 Self::FinalGather => Reconstruction::FinalGather,
             },
-            gather_opening: 0.0,
+            ..AnswerParams::final_gather(0.0)
         }
     }
 }
