@@ -938,7 +938,8 @@ impl FinalGather {
 
     /// Source `j`'s value gathered once more at its centroid over the solution's values (near values, module
     /// documentation), or its own value where the centroid is sealed (under a block, where a gather would
-    /// read the light the solution sent into the gap). Its rays and kernel evaluations are the gather's.
+    /// read the light the solution sent into the gap) or open only after a closed ray (beside a gap, where a
+    /// gather measures every source with 16 rays). Its rays and kernel evaluations are the gather's.
     fn regathered_value(
         &self,
         scene: &Scene,

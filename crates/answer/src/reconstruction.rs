@@ -96,8 +96,8 @@ pub struct AnswerParams {
     /// the solution) or regathered (its value gathered once more at its centroid, at its first use, charged to
     /// answering: the solution's error there reaches the point damped by one more bounce). Default solution:
     /// regathered takes volume and face clusters' worst points under scanned meshes from 16–27% to 8–13%, but
-    /// costs up to 35 times the answering time, and volume clusters' runs on a polygon soup and a 10⁵-face
-    /// terrain no longer answered within 300 s (docs/methods.md, "Near values").
+    /// costs up to 35 times the answering time, and with it neither method's run on a polygon soup, nor
+    /// volume clusters' on a 10⁵-face terrain, answered within 300 s (docs/methods.md, "Near values").
     pub near_values: NearValues,
 }
 
