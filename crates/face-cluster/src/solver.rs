@@ -232,6 +232,32 @@ impl MethodParams for FaceClusterSolveParams {
                 ),
             ));
         }
+        // Near values re-gather the faces near a point over the solution's values in the tree gather; gathered
+        // values re-gather every face already, and the shared gather of the flat near field takes its own.
+        if self.engine.answer.near_values != d.engine.answer.near_values {
+            let other = [
+                (
+                    "gather_values",
+                    self.gather_values != GatherValues::Solution,
+                    self.gather_values.as_str(),
+                ),
+                (
+                    "near_field",
+                    self.near_field != NearField::Off,
+                    self.near_field.as_str(),
+                ),
+            ];
+            if let Some((key, _, v)) = other.into_iter().find(|o| o.1) {
+                return Err(SolveError::param(
+                    "near_values",
+                    format!(
+                        "near_values = {} applies to face clusters' tree gather over the solution's values, and \
+                         {key} is {v}; remove near_values or {key}",
+                        self.engine.answer.near_values.as_str()
+                    ),
+                ));
+            }
+        }
         if self.near_field != NearField::Off && self.engine.answer.gather_opening != 0.0 {
             return Err(SolveError::param(
                 "near_field",

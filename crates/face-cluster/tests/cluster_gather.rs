@@ -418,7 +418,9 @@ fn an_opening_outside_zero_to_one_or_without_a_final_gather_is_refused() {
 }
 
 /// Gathered values' parameters: `gather_values` takes solution or gathered and only with final-gather answers;
-/// `values_opening` lies in [0, 1) and only with gathered values. Each refusal names its key and the fix.
+/// `values_opening` lies in [0, 1) and only with gathered values; `near_values = "regathered"` goes with neither
+/// gathered values nor the flat gather's near field, which do not read it. Each refusal names its key and the
+/// fix.
 #[test]
 fn gathered_values_parameters_are_checked() {
     let refused = |pairs: &[(&str, &str)]| try_params(pairs).expect_err("refused").to_string();
@@ -450,6 +452,21 @@ fn gathered_values_parameters_are_checked() {
         assert!(
             err.contains("values_opening") && err.contains("[0, 1)"),
             "{bad}: {err}"
+        );
+    }
+    for other in [
+        ("gather_values", "\"gathered\""),
+        ("near_field", "\"sub-polygons\""),
+    ] {
+        let err = refused(&[
+            fg,
+            ("gather_opening", "0"),
+            ("near_values", "\"regathered\""),
+            other,
+        ]);
+        assert!(
+            err.contains("near_values") && err.contains(other.0),
+            "{other:?}: {err}"
         );
     }
     let ok = params(&[
