@@ -233,7 +233,7 @@ impl MethodParams for FaceClusterSolveParams {
             ));
         }
         // Near values re-gather the faces near a point over the solution's values in the tree gather; gathered
-        // values re-gather every face already, and the shared gather of the flat near field takes its own.
+        // values re-gather every face already, and the flat near field's shared gather does not read them.
         if self.engine.answer.near_values != d.engine.answer.near_values {
             let other = [
                 (
