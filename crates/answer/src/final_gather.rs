@@ -97,15 +97,17 @@
 //! visibility fraction, a mesh's element mean. Far from the query point the gather's small factors damp it,
 //! but an element near the point passes it on nearly whole: the floor under a scanned dragon, which sees mostly
 //! its underside, answered 19% bright from volume clusters' values there. So an element the gather takes one
-//! by one (not through a far group) whose centroid lies within [`NEAR_VALUES_REACH`] of its diameters from the
-//! point, but outside its near field, is read at its value gathered once more at its centroid, E + ρ Σ F V B
+//! by one (not through a far group), outside its near field, seen from the point (V > 0) with a factor of at
+//! least [`NEAR_VALUES_MIN_FACTOR`], is read at its value gathered once more at its centroid, E + ρ Σ F V B
 //! over the solution's values (this gather, with its own near field and far groups), computed at its first
 //! use and kept: two bounces near the point and one far from it, a local Jacobi step (Cohen & Wallace 1993,
 //! ch. 5) for a gather per element some query comes near. A centroid the seal test finds sealed or beside a
 //! gap (where a gather measures every source with 16 rays), an element with a sealed part (its value is its
-//! open part's mean) and an emitter keep their values. Not the default: a polygon soup's 20,000 intersecting
-//! triangles put many elements near every point, and volume clusters' answering passes there took 5 times as
-//! long, so the run no longer answered within its time (docs/methods.md, "Near values"). Inside the near
+//! open part's mean) and an emitter keep their values. Volume and face clusters' default (the floor under a
+//! scanned dragon 13–14% off instead of 19–27%), not the other methods': their values carry no clusters'
+//! approximations, and their answers moved by at most 0.07 points for 2–7 times the answering time; a polygon
+//! soup's 20,000 intersecting triangles put many elements near every point, and there volume clusters'
+//! answering passes take 2.4 times as long (docs/methods.md, "Near values"). Inside the near
 //! field the sub-polygons' values stay centred on the solution's value (above): centred on the re-gathered
 //! one instead, the Cornell box's points on the short block's face a millimetre above the floor moved from
 //! +18% and +39% to +21% and +16% (matrix), mixed.
@@ -150,18 +152,12 @@ pub const NEAR_SET: f64 = 1.55;
 /// vanishing remainder when the near set fills a centroid's view).
 const MIN_FAR_SHARE: f64 = 0.05;
 
-/// Near values ([`FinalGather::with_near_values`]): an element taken one by one whose centroid lies closer to the
-/// query point than this multiple of its diameter is read at its value gathered once more at its centroid. At
-/// the default opening (0.25) the gather takes one by one the elements of groups it opens, which lie within
-/// a few of their diameters; at opening 0 the reach keeps the re-gathers to the elements around the query
-/// points. Face clusters' worst point on the dragon room was 16.6% at 1 diameter, 13.1% at 4 and at 16
-/// (docs/methods.md, "Near values").
-pub const NEAR_VALUES_REACH: f64 = 4.0;
-
-/// Whether `point` lies within [`NEAR_VALUES_REACH`] of `polygon`'s diameters from its centroid.
-pub fn within_near_values_reach(point: DVec3, polygon: &Polygon) -> bool {
-    point.distance(polygon.centroid()) < NEAR_VALUES_REACH * polygon.diameter()
-}
+/// Near values ([`FinalGather::with_near_values`]): an element taken one by one whose point-to-element factor
+/// from the query point is at least this is read at its value gathered once more at its centroid. The error an
+/// element's value carries reaches the point weighted by that factor, so the bound re-gathers the elements that
+/// pass most of it on and leaves the many small or distant ones, each passing on less than 1% of its value's
+/// error, at their solution values. (A factor of 0.01 needs the element within about five of its diameters.)
+pub const NEAR_VALUES_MIN_FACTOR: f64 = 0.01;
 
 /// The largest share of a point's estimated light (unoccluded, [`crate::source_tree`]) a far group of sources
 /// may hold and be gathered through one drawn source; a brighter group is opened. On a finely meshed Cornell
@@ -367,7 +363,10 @@ impl Reach {
     fn of(polygon: &Polygon) -> Self {
         let centre = polygon.centroid();
         Self {
-            distance: NEAR_FIELD * polygon.diameter(),
+            // A hair over the reach asked for, so that a point exactly that far (an element's centroid a
+            // diameter from a neighbour of a regular mesh, where near values re-gather) is near at every
+            // scale of the scene, as the source tree's opening is decided.
+            distance: NEAR_FIELD * polygon.diameter() * (1.0 + 1e-7),
             centre,
             radius: polygon
                 .vertices()
@@ -477,8 +476,9 @@ impl FinalGather {
         self.with_groups(opening, GROUP_SHARE)
     }
 
-    /// The same gather reading each source it takes one by one within [`NEAR_VALUES_REACH`] of the point (outside
-    /// its near field; not an emitter, nor a source with a sealed part) at its value gathered once more at its
+    /// The same gather reading each source it takes one by one with a factor of at least
+    /// [`NEAR_VALUES_MIN_FACTOR`] from the point (seen from it, outside its near field; not an emitter, nor a
+    /// source with a sealed part) at its value gathered once more at its
     /// centroid, computed at its first use (module documentation, "Near values").
     pub fn with_near_values(mut self) -> Self {
         self.regathered = (0..self.sources.len()).map(|_| OnceLock::new()).collect();
@@ -927,7 +927,8 @@ impl FinalGather {
         let b = if near_values
             && !*emits
             && src.open >= 1.0
-            && within_near_values_reach(point, &src.polygon)
+            && f >= NEAR_VALUES_MIN_FACTOR
+            && v > 0.0
         {
             *self.regathered[j].get_or_init(|| self.regathered_value(scene, accel, j, far))
         } else {
@@ -1551,15 +1552,16 @@ mod tests {
 
     /// Near values are a second gather of the sources near the point: inside a closed sphere of ρ = 0.5 with
     /// no emission and every element given B₀ = 1, a near-field source's sub-polygon values are 1 (T(q) = 1
-    /// at every q: the inside's factors sum to one), a source outside its near field but within
-    /// [`NEAR_VALUES_REACH`] of its diameters is read at its re-gathered ρ B₀ = 0.5, and every other at 1; so
-    /// the flat gather answers B(x) = 0.5 (1 − 0.5 Σ_regathered F_{x→j}), Baum's exact factors (1e-9), below
-    /// one gather's 0.5 wherever some source is re-gathered. The values are kept: a second pass over the same
-    /// queries costs what a second pass without near values costs.
+    /// at every q: the inside's factors sum to one), a source outside its near field with a factor of at
+    /// least [`NEAR_VALUES_MIN_FACTOR`] is read at its re-gathered ρ B₀ = 0.5, and every other at 1; so the
+    /// flat gather answers B(x) = 0.5 (1 − 0.5 Σ_regathered F_{x→j}), Baum's exact factors (1e-9), below one
+    /// gather's 0.5 wherever some source is re-gathered. On this sphere of 108 faces the factors from a
+    /// centroid run from 0 to 0.019, so each query re-gathers some sources and not others. The values are
+    /// kept: a second pass over the same queries costs what a second pass without near values costs.
     #[test]
     fn near_values_read_the_sources_near_the_point_gathered_once_more() {
         let scene =
-            builtin("furnace-sphere?tessellation=6&reflectance=0.5&emission=0").expect("scene");
+            builtin("furnace-sphere?tessellation=3&reflectance=0.5&emission=0").expect("scene");
         let accel = Accel::new(&scene);
         let els: Vec<ElementValue> = (0..scene.face_count())
             .map(|f| whole_face(&scene, f))
@@ -1570,15 +1572,19 @@ mod tests {
         let mut below = 0;
         for &f in &queries {
             let (x, n) = (scene.faces[f].centroid, scene.faces[f].normal);
-            let regathered: f64 = els
-                .iter()
-                .filter(|e| {
-                    e.face != f
-                        && !Reach::of(&e.polygon).holds(&e.polygon, x)
-                        && within_near_values_reach(x, &e.polygon)
-                })
-                .map(|e| point_polygon(x, n, &e.polygon))
-                .sum();
+            let (mut regathered, mut kept) = (0.0, 0);
+            for e in els.iter().filter(|e| e.face != f) {
+                let ff = point_polygon(x, n, &e.polygon);
+                if Reach::of(&e.polygon).holds(&e.polygon, x) {
+                    continue;
+                }
+                if ff >= NEAR_VALUES_MIN_FACTOR {
+                    regathered += ff;
+                } else {
+                    kept += 1;
+                }
+            }
+            assert!(kept > 0, "face {f}: some sources keep their values");
             let want = 0.5 * (1.0 - 0.5 * regathered);
             let b = near.radiosity_at(&scene, &accel, f, x).x;
             assert!((b - want).abs() <= 1e-9, "face {f}: {b} vs {want}");

@@ -91,13 +91,13 @@ pub struct AnswerParams {
     /// faster, with more noise.
     #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub gather_opening: f64,
-    /// Final-gather only: what the gather reads for an element it takes one by one within
-    /// [`crate::final_gather::NEAR_VALUES_REACH`] of the element's diameters from the point: solution (its value in
-    /// the solution) or regathered (its value gathered once more at its centroid, at its first use, charged to
-    /// answering: the solution's error there reaches the point damped by one more bounce). Default solution:
-    /// regathered takes volume and face clusters' worst points under scanned meshes from 16–27% to 8–13%, but
-    /// costs up to 35 times the answering time, and with it neither method's run on a polygon soup, nor
-    /// volume clusters' on a 10⁵-face terrain, answered within 300 s (docs/methods.md, "Near values").
+    /// Final-gather only: what the gather reads for an element it takes one by one with a factor of at least
+    /// [`crate::final_gather::NEAR_VALUES_MIN_FACTOR`] from the point (and sees): solution (its value in the
+    /// solution) or regathered (its value gathered once more at its centroid, at its first use, charged to
+    /// answering: the solution's error there reaches the point damped by one more bounce). Default regathered
+    /// for volume and face clusters, whose cluster-made values left the floor under scanned meshes 19–27% off
+    /// (13–14% with it), solution for the other methods, whose answers it moved by at most 0.07 points for 2–7
+    /// times the answering time (docs/defaults.md, docs/methods.md "Near values").
     pub near_values: NearValues,
 }
 

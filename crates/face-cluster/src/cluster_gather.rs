@@ -42,17 +42,18 @@
 //! re-gathers each near face's sub-polygons at their own points (see there), with the far part of those
 //! re-gathers from this tree gather ([`TreeFarField`]).
 //!
-//! Near values (`near_values = "regathered"`, radlab-answer's parameter; not the default). A face value carries
-//! the solution's error: the light a cluster's irradiance vector hands a face by its orientation alone, or a
-//! link's one visibility fraction. Far from the query point that error is damped by the gather's small
+//! Near values (`near_values = "regathered"`, radlab-answer's parameter; face clusters' default). A face value
+//! carries the solution's error: the light a cluster's irradiance vector hands a face by its orientation alone,
+//! or a link's one visibility fraction. Far from the query point that error is damped by the gather's small
 //! factors, but a face the gather reaches one by one near the point passes it on whole: the floor under a
 //! scanned dragon or a ball, which sees mostly their undersides, answered 27% and 22% dark where those faces
-//! held too little of the floor's light. So [`ClusterGather::with_near_values`] gathers a non-emitting face or
-//! patch leaf it reaches one by one within [`radlab_answer::final_gather::NEAR_VALUES_REACH`] of its diameters
-//! from the point with its value re-gathered over the tree at its centroid from the solution's values,
-//! E + ρ Σ F V B (its own direct light and visibility, one more bounce), computed once, at its first use, and
-//! kept: two bounces near the point and one far from it, a local form of the Jacobi iteration below, for a
-//! gather per face some query comes near rather than per face of the scene. The re-gather reads a split
+//! held too little of the floor's light (14% and 12% with near values). So [`ClusterGather::with_near_values`]
+//! gathers a non-emitting face or patch leaf it reaches one by one, seen from the point with a factor of at
+//! least [`radlab_answer::final_gather::NEAR_VALUES_MIN_FACTOR`], with its value re-gathered over the tree at
+//! its centroid from the gather's values, E + ρ Σ F V B (its own direct light and visibility, one more
+//! bounce), computed once, at its first use, and kept: two bounces near the point and one far from it, a local
+//! form of the Jacobi iteration below, for a gather per face some query comes near rather than per face of
+//! the scene (over gathered values, below, one more gather of those). The re-gather reads a split
 //! emitter whole, with kernel-weighted rays. A centroid the seal test finds sealed, or open only after a
 //! closed ray (beside a gap, where a gather measures every source with 16 rays), keeps the solution's value,
 //! and so does a patch leaf with a sealed part (its value is its open part's mean).
@@ -77,7 +78,7 @@ use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
-use radlab_answer::final_gather::{FarField, GatherSettings, query_key, within_near_values_reach};
+use radlab_answer::final_gather::{FarField, GatherSettings, NEAR_VALUES_MIN_FACTOR, query_key};
 use radlab_answer::gouraud::ElementValue;
 use radlab_kernels::form_factor::point_polygon;
 use radlab_kernels::open_fraction::{POINT_SEAL_RAYS, point_key, point_sealed};
@@ -353,30 +354,31 @@ impl ClusterGather {
         point: DVec3,
         in_gap: bool,
     ) -> Rgb {
-        let scene = ctx.scene;
-        let (rho, e) = (scene.reflectance(face), scene.emission(face));
-        if rho.max_element() <= 0.0 {
-            return e;
-        }
-        e + rho * self.irradiance_at(ctx, accel, face, point, in_gap)
+        self.radiosity_over(ctx, accel, face, point, in_gap, Pass::Answer)
     }
 
-    /// Σ_j F V B_j at `point` on `face`: what [`ClusterGather::radiosity_at`] multiplies by ρ. `in_gap`: the
-    /// point lies in or beside a gap (its seal test found it open only after a closed ray), and every node is
-    /// opened and every face's visible share measured by the kernel-weighted `direct` rays (module
-    /// documentation).
-    pub fn irradiance_at(
+    /// [`ClusterGather::radiosity_at`] in `pass`: E + ρ times [`ClusterGather::irradiance_over`].
+    fn radiosity_over(
         &self,
         ctx: &FaceContext<'_>,
         accel: &Accel,
         face: FaceId,
         point: DVec3,
         in_gap: bool,
+        pass: Pass,
     ) -> Rgb {
-        self.irradiance_over(ctx, accel, face, point, in_gap, Pass::Answer)
+        let scene = ctx.scene;
+        let (rho, e) = (scene.reflectance(face), scene.emission(face));
+        if rho.max_element() <= 0.0 {
+            return e;
+        }
+        e + rho * self.irradiance_over(ctx, accel, face, point, in_gap, pass)
     }
 
-    /// [`ClusterGather::irradiance_at`] in `pass`: see [`Pass`].
+    /// Σ_j F V B_j at `point` on `face` in `pass` (see [`Pass`]): what [`ClusterGather::radiosity_at`] multiplies
+    /// by ρ. `in_gap`: the point lies in or beside a gap (its seal test found it open only after a closed ray),
+    /// and every node is opened and every face's visible share measured by the kernel-weighted `direct` rays
+    /// (module documentation).
     fn irradiance_over(
         &self,
         ctx: &FaceContext<'_>,
@@ -474,18 +476,22 @@ impl ClusterGather {
         let scene = ctx.scene;
         let emits = scene.material(f).is_emitter();
         // Near values: of a non-emitting element wholly open (a leaf with a sealed part keeps its open part's
-        // mean, which a value at its centroid would not give), near the point.
-        let near = self.near.as_ref().filter(|_| pass == Pass::Answer);
+        // mean, which a value at its centroid would not give).
+        let near = self
+            .near
+            .as_ref()
+            .filter(|_| pass == Pass::Answer && !emits);
         // A re-gather reads an emitter whole, as the values' gather of gathered values does.
         let whole_emitter = emits && (self.kernel_weighted_emitters || pass == Pass::NearValue);
-        let value = |el: &ElementValue, cache: &OnceLock<Rgb>| {
-            if emits || el.open < 1.0 || !within_near_values_reach(point, &el.polygon) {
-                return el.radiosity;
-            }
-            *cache.get_or_init(|| self.near_value(ctx, accel, el))
-        };
-        let one = |el: &ElementValue, stream: u64, rays: &mut u64, kernels: &mut u64| {
-            if el.radiosity.max_element() <= 0.0 {
+        // F V B of `el`, its value re-gathered (`cache`) where its factor reaches the bound and it is seen; the
+        // factor and the rays come first, so an element behind the point or hidden from it is not re-gathered.
+        let one = |el: &ElementValue,
+                   cache: Option<&OnceLock<Rgb>>,
+                   stream: u64,
+                   rays: &mut u64,
+                   kernels: &mut u64| {
+            let cache = cache.filter(|_| el.open >= 1.0);
+            if cache.is_none() && el.radiosity.max_element() <= 0.0 {
                 return Rgb::ZERO;
             }
             *kernels += 1;
@@ -510,29 +516,26 @@ impl ClusterGather {
                 self.settings
                     .visible_share(accel, face, point, n, key, stream, el, emits, rays)
             };
-            (ff * v) * el.radiosity
+            let b = match cache {
+                Some(c) if ff >= NEAR_VALUES_MIN_FACTOR && v > 0.0 => {
+                    *c.get_or_init(|| self.near_value(ctx, accel, el))
+                }
+                _ => el.radiosity,
+            };
+            (ff * v) * b
         };
         match self.patches.get(&f).filter(|_| !whole_emitter) {
             Some(leaves) => leaves
                 .iter()
                 .enumerate()
                 .map(|(i, el)| {
-                    let stream = mix64(f as u64) ^ i as u64;
-                    match near {
-                        Some(values) => {
-                            let radiosity = value(el, &values.leaves[&f][i]);
-                            one(&ElementValue { radiosity, ..*el }, stream, rays, kernels)
-                        }
-                        None => one(el, stream, rays, kernels),
-                    }
+                    let cache = near.map(|values| &values.leaves[&f][i]);
+                    one(el, cache, mix64(f as u64) ^ i as u64, rays, kernels)
                 })
                 .fold(Rgb::ZERO, |a, b| a + b),
             None => {
-                let mut el = self.whole_face(scene, f);
-                if let Some(values) = near {
-                    el.radiosity = value(&el, &values.faces[f]);
-                }
-                one(&el, f as u64, rays, kernels)
+                let cache = near.map(|values| &values.faces[f]);
+                one(&self.whole_face(scene, f), cache, f as u64, rays, kernels)
             }
         }
     }
@@ -545,9 +548,9 @@ impl ClusterGather {
     fn near_value(&self, ctx: &FaceContext<'_>, accel: &Accel, el: &ElementValue) -> Rgb {
         let scene = ctx.scene;
         let (f, c) = (el.face, el.polygon.centroid());
-        let (rho, e) = (scene.reflectance(f), scene.emission(f));
-        if rho.max_element() <= 0.0 {
-            return e;
+        // A face that reflects nothing answers its emission, its value already.
+        if scene.reflectance(f).max_element() <= 0.0 {
+            return el.radiosity;
         }
         let (sealed, seal_rays) = point_sealed(
             scene,
@@ -562,7 +565,7 @@ impl ClusterGather {
         if sealed || seal_rays > 1 {
             return el.radiosity;
         }
-        e + rho * self.irradiance_over(ctx, accel, f, c, false, Pass::NearValue)
+        self.radiosity_over(ctx, accel, f, c, false, Pass::NearValue)
     }
 
     /// Input face `f` as one source element with its value.

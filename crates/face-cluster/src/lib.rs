@@ -55,9 +55,9 @@
 //! centroids; `constant` for one value per cluster) and `self_exchange` ([`self_exchange`]). Point answers
 //! are by default one more gather over the tree (`reconstruction = "final-gather"`, [`cluster_gather`]: far
 //! nodes by their power vectors, `gather_opening` 0.25 by default, near faces and emitters by exact
-//! point-to-polygon factors, the near faces with their values gathered once more at their centroids,
-//! `gather_values = "near"` by default), the most accurate of the three at a cost per point that grows as
-//! log k; at
+//! point-to-polygon factors, the near faces seen with a factor of at least 0.01 with their values gathered
+//! once more at their centroids, `near_values = "regathered"` by default), the most accurate of the three at a
+//! cost per point that grows as log k; at
 //! `gather_opening = 0`, `near_field = "sub-polygons"` gathers through the shared final gather with its near
 //! field, its far light from the tree gather. `reconstruction = "gouraud"` interpolates the faces' irradiance
 //! rather than their radiosity so each face keeps its own orientation ([`FaceClusterSolver`]): no gather, but

@@ -28,10 +28,11 @@
 //! the three answers and the default, chosen by the worst scenes of the defaults suite, where Gouraud answers
 //! smear light across shadow edges. Its cost shows in `radlab solve`, which answers 16 points a face for its
 //! face table and every corner of its mesh: millions of gathers at 10⁶ faces, where Gouraud answers cost
-//! seconds. With `near_values = "regathered"` the faces it gathers one by one near the point read their values
-//! gathered once more at their centroids ([`crate::cluster_gather`]), each at its first use, a gather per face
-//! some query comes near; with `gather_values = "gathered"` every face's value is gathered so first (a second
-//! bounce everywhere), for k more gathers a solution. Both are charged to answering.
+//! seconds. With `near_values = "regathered"` (the default) the faces it gathers one by one near the point, with
+//! a factor of at least 0.01, read their values gathered once more at their centroids
+//! ([`crate::cluster_gather`]), each at its first use, a gather per face some query comes near; with
+//! `gather_values = "gathered"` every face's value is gathered so first (a second bounce everywhere), for k
+//! more gathers a solution, and near values re-gather over those. Both are charged to answering.
 //! With `gather_opening = 0` and `near_field = "sub-polygons"` the flat gather is radlab-answer's shared final
 //! gather over the same values, whose near field re-gathers faces close to the point as sub-polygons
 //! ([`NearField`]); its rays, kernel evaluations and bytes are charged to answering as well.
@@ -150,7 +151,13 @@ impl Default for FaceClusterSolveParams {
                 // the figures). Gouraud costs no gather and stays a setting.
                 // Over the face-cluster tree ([`crate::cluster_gather`]): a node smaller than the opening times
                 // its distance is gathered whole by its power vector, with an error of order its square.
-                answer: AnswerParams::final_gather(DEFAULT_OPENING),
+                // Near values: the faces near the point that pass on most of a value's error (factor ≥ 0.01)
+                // read their values gathered once more, where the clusters' values under a scanned mesh
+                // left the floor 16–27% dark (chosen on the suite, docs/defaults.md).
+                answer: AnswerParams {
+                    near_values: NearValues::Regathered,
+                    ..AnswerParams::final_gather(DEFAULT_OPENING)
+                },
                 ..HierarchicalParams::default()
             },
             cache_dir: DEFAULT_CACHE_DIR.to_string(),
@@ -231,32 +238,6 @@ impl MethodParams for FaceClusterSolveParams {
                     self.gather_values.as_str()
                 ),
             ));
-        }
-        // Near values re-gather the faces near a point over the solution's values in the tree gather; gathered
-        // values re-gather every face already, and the flat near field's shared gather does not read them.
-        if self.engine.answer.near_values != d.engine.answer.near_values {
-            let other = [
-                (
-                    "gather_values",
-                    self.gather_values != GatherValues::Solution,
-                    self.gather_values.as_str(),
-                ),
-                (
-                    "near_field",
-                    self.near_field != NearField::Off,
-                    self.near_field.as_str(),
-                ),
-            ];
-            if let Some((key, _, v)) = other.into_iter().find(|o| o.1) {
-                return Err(SolveError::param(
-                    "near_values",
-                    format!(
-                        "near_values = {} applies to face clusters' tree gather over the solution's values, and \
-                         {key} is {v}; remove near_values or {key}",
-                        self.engine.answer.near_values.as_str()
-                    ),
-                ));
-            }
         }
         if self.near_field != NearField::Off && self.engine.answer.gather_opening != 0.0 {
             return Err(SolveError::param(
@@ -612,11 +593,15 @@ impl<'a> FaceClusterSolver<'a> {
     fn near_field_answer(&self, face: FaceId, point: DVec3) -> Rgb {
         let tree = self.cluster_gather(DEFAULT_OPENING);
         let flat = self.flat.get_or_init(|| {
-            FinalGather::new(
+            let flat = FinalGather::new(
                 self.scene,
                 &tree.elements(self.scene),
                 GatherSettings::with_seed(self.seed),
-            )
+            );
+            match self.near_values {
+                NearValues::Solution => flat,
+                NearValues::Regathered => flat.with_near_values(),
+            }
         });
         let far = TreeFarField {
             gather: tree,
@@ -660,13 +645,9 @@ impl<'a> FaceClusterSolver<'a> {
                     None => self.constant_at(f, self.scene.faces[f].centroid),
                 })
                 .collect();
-            match self.gather_values {
+            let gather = match self.gather_values {
                 GatherValues::Solution => {
-                    let gather = ClusterGather::new(&self.ctx, values, patches, opening, self.seed);
-                    match self.near_values {
-                        NearValues::Solution => gather,
-                        NearValues::Regathered => gather.with_near_values(),
-                    }
+                    ClusterGather::new(&self.ctx, values, patches, opening, self.seed)
                 }
                 GatherValues::Gathered => ClusterGather::regathered(
                     &self.ctx,
@@ -676,6 +657,10 @@ impl<'a> FaceClusterSolver<'a> {
                     (opening, self.values_opening),
                     self.seed,
                 ),
+            };
+            match self.near_values {
+                NearValues::Solution => gather,
+                NearValues::Regathered => gather.with_near_values(),
             }
         })
     }

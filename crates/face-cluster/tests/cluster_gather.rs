@@ -11,7 +11,7 @@ use common::{params, solve, try_params};
 use std::collections::HashMap;
 
 use glam::dvec3;
-use radlab_answer::final_gather::within_near_values_reach;
+use radlab_answer::final_gather::NEAR_VALUES_MIN_FACTOR;
 use radlab_face_cluster::{
     ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
     FaceContext, GatherValues, NearField,
@@ -172,17 +172,18 @@ fn gathered_values_are_one_jacobi_iteration_and_their_work_is_counted() {
 }
 
 /// Near values are gathered values where the query point is near: inside a closed sphere of ρ = 0.5 and no
-/// emission, with every face given the value B₀ = 1, the flat gather reads a face within `NEAR_VALUES_REACH` of
-/// its diameters from the point at its value gathered once more, ρ B₀ = 0.5 (the inside's factors sum to one),
-/// and every other face at 1, so at a face's centroid x, B = ρ (Σ_near 0.5 F + Σ_far F) = 0.5 − 0.25 Σ_near
-/// F_{x→j}, with F Baum's exact factor (1e-9). On a sphere of 12 faces every face is near every centroid: two
-/// gathers, 0.25; on one of 432 only some are, and B lies strictly between two gathers' 0.25 and one gather's
-/// 0.5. The values are gathered once, at their first use: a second pass over the same queries counts the kernel
-/// evaluations of a gather over the solution's values, and the first pass more (the re-gathers, charged to
-/// answering).
+/// emission, with every face given the value B₀ = 1, the flat gather reads a face whose factor from the point is
+/// at least `NEAR_VALUES_MIN_FACTOR` at its value gathered once more, ρ B₀ = 0.5 (the inside's factors sum to
+/// one), and every other face at 1, so at a face's centroid x, B = ρ (Σ_near 0.5 F + Σ_far F) = 0.5 − 0.25
+/// Σ_near F_{x→j}, with F Baum's exact factor (1e-9). On a sphere of 12 faces every face is near every
+/// centroid: two gathers, 0.25; on one of 108 the factors from a centroid run from 0 to 0.019, only some are
+/// near, and B lies strictly between two gathers' 0.25 and one gather's 0.5. Over gathered values (each
+/// 0.5) the near faces read 0.25 and the answer is half that. The values are gathered once, at
+/// their first use: a second pass over the same queries counts the kernel evaluations of a gather over the
+/// solution's values, and the first pass more (the re-gathers, charged to answering).
 #[test]
 fn near_values_are_a_second_gather_of_the_faces_near_the_point() {
-    for (n, every_face_near) in [(1, true), (6, false)] {
+    for (n, every_face_near) in [(1, true), (3, false)] {
         let scene = builtin(&format!(
             "furnace-sphere?tessellation={n}&reflectance=0.5&emission=0"
         ))
@@ -191,7 +192,12 @@ fn near_values_are_a_second_gather_of_the_faces_near_the_point() {
         let ctx = context(&scene);
         let ones = vec![Rgb::ONE; scene.face_count()];
         let plain = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5);
-        let near = ClusterGather::new(&ctx, ones, HashMap::new(), 0.0, 5).with_near_values();
+        let near =
+            ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5).with_near_values();
+        // Over gathered values (each ρ B₀ = 0.5) near faces read 0.25: every term halves.
+        let twice_near =
+            ClusterGather::regathered(&ctx, &accel, ones, HashMap::new(), (0.0, 0.0), 5)
+                .with_near_values();
         let queries: Vec<usize> = (0..scene.face_count()).step_by(5).collect();
         let mut strictly_between = 0;
         for &f in &queries {
@@ -199,13 +205,18 @@ fn near_values_are_a_second_gather_of_the_faces_near_the_point() {
             let n_x = scene.faces[f].normal;
             let near_factors: f64 = (0..scene.face_count())
                 .filter(|&j| j != f)
-                .map(|j| scene.polygon(j))
-                .filter(|p| within_near_values_reach(x, p))
-                .map(|p| point_polygon(x, n_x, &p))
+                .map(|j| point_polygon(x, n_x, &scene.polygon(j)))
+                .filter(|&ff| ff >= NEAR_VALUES_MIN_FACTOR)
                 .sum();
             let want = 0.5 - 0.25 * near_factors;
             let b = near.radiosity_at(&ctx, &accel, f, x, false).x;
             assert!((b - want).abs() <= 1e-9, "{n}, face {f}: {b} vs {want}");
+            let b2 = twice_near.radiosity_at(&ctx, &accel, f, x, false).x;
+            assert!(
+                (b2 - want / 2.0).abs() <= 1e-9,
+                "{n}, face {f}, over gathered values: {b2} vs {}",
+                want / 2.0
+            );
             if every_face_near {
                 assert!((b - 0.25).abs() <= 1e-9, "face {f}: {b}");
             }
@@ -418,9 +429,8 @@ fn an_opening_outside_zero_to_one_or_without_a_final_gather_is_refused() {
 }
 
 /// Gathered values' parameters: `gather_values` takes solution or gathered and only with final-gather answers;
-/// `values_opening` lies in [0, 1) and only with gathered values; `near_values = "regathered"` goes with neither
-/// gathered values nor the flat gather's near field, which do not read it. Each refusal names its key and the
-/// fix.
+/// `values_opening` lies in [0, 1) and only with gathered values. Each refusal names its key and the fix.
+/// `near_values` goes with either values and either near field.
 #[test]
 fn gathered_values_parameters_are_checked() {
     let refused = |pairs: &[(&str, &str)]| try_params(pairs).expect_err("refused").to_string();
@@ -454,20 +464,19 @@ fn gathered_values_parameters_are_checked() {
             "{bad}: {err}"
         );
     }
-    for other in [
-        ("gather_values", "\"gathered\""),
-        ("near_field", "\"sub-polygons\""),
+    // Near values apply over gathered values and through the flat gather's near field alike.
+    for (values, near_values) in [
+        ("\"gathered\"", "\"solution\""),
+        ("\"solution\"", "\"regathered\""),
     ] {
-        let err = refused(&[
+        let ok = params(&[
             fg,
             ("gather_opening", "0"),
-            ("near_values", "\"regathered\""),
-            other,
+            ("gather_values", values),
+            ("near_field", "\"sub-polygons\""),
+            ("near_values", near_values),
         ]);
-        assert!(
-            err.contains("near_values") && err.contains(other.0),
-            "{other:?}: {err}"
-        );
+        assert!(ok.validate().is_ok());
     }
     let ok = params(&[
         fg,

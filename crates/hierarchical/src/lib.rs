@@ -28,7 +28,7 @@
 //! | `gather` | `leaf` | `leaf` (kernel integrated at each leaf for every link above it; exact form-factor sums) or `link` (classic per-link mean, pushed) |
 //! | `reconstruction` | `final-gather` | `constant` per leaf, `gouraud` (vertex-interpolated, T-vertices resolved), or `final-gather` (one more gather from every leaf; radlab_answer::reconstruction); the default chosen by measurement ([`DEFAULT_RECONSTRUCTION`]) |
 //! | `gather_opening` | 0.25 | final-gather only: far groups of leaves through one drawn leaf each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every leaf |
-//! | `near_values` | solution | final-gather only: regathered reads each leaf taken one by one within 4 of its diameters of the point at its value gathered once more at its centroid (radlab_answer::NearValues) |
+//! | `near_values` | solution | final-gather only: regathered reads each leaf taken one by one with a factor of at least 0.01 from the point (and seen from it) at its value gathered once more at its centroid (radlab_answer::NearValues) |
 //! | `memory_budget_mib` | 4096 | refuse to hold more |
 //!
 //! Every quantity is relative (ε, tolerance) or relative to the scene's size (the default minimum element), so

@@ -43,7 +43,7 @@
 //! | `memory_budget_mib` | 2048 | refuse problems whose matrix and vectors exceed this |
 //! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` |
 //! | `gather_opening` | 0.25 | final-gather only: far groups of elements through one drawn element each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every element |
-//! | `near_values` | solution | final-gather only: regathered reads each element taken one by one within 4 of its diameters of the point at its value gathered once more at its centroid (radlab_answer::NearValues) |
+//! | `near_values` | solution | final-gather only: regathered reads each element taken one by one with a factor of at least 0.01 from the point (and seen from it) at its value gathered once more at its centroid (radlab_answer::NearValues) |
 //!
 //! ## Cost
 //! n elements: **O(n²) memory** (8 n² bytes: about 8 MB at n = 1,000, 800 MB at n = 10,000) and **O(n²)

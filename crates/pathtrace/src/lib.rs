@@ -56,7 +56,7 @@
 //! | `max_depth` | 100000 | cap on bounces (walks) or generations (Jacobi) |
 //! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (radlab_answer::reconstruction) |
 //! | `gather_opening` | 0.25 | final-gather only: far groups of elements through one drawn element each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every element |
-//! | `near_values` | solution | final-gather only: regathered reads each element taken one by one within 4 of its diameters of the point at its value gathered once more at its centroid (radlab_answer::NearValues) |
+//! | `near_values` | solution | final-gather only: regathered reads each element taken one by one with a factor of at least 0.01 from the point (and seen from it) at its value gathered once more at its centroid (radlab_answer::NearValues) |
 //!
 //! **Cost**: O(particles × 1/(1 − ρ̄)) rays, independent of the number of element pairs (no form factors);
 //! memory O(elements). **Does badly**: small or dimly lit elements receive few particles and stay noisy

@@ -52,7 +52,7 @@
 //! | `overshoot` | `ambient` | `none` (plain Southwell shooting) or `ambient` (overshooting, see above) |
 //! | `reconstruction` | `final-gather` | point answers: `constant`, `gouraud` or `final-gather` (see below) |
 //! | `gather_opening` | 0.25 | final-gather only: far groups of elements through one drawn element each (radlab_answer::AnswerParams, DEFAULT_GATHER_OPENING); 0 gathers every element |
-//! | `near_values` | solution | final-gather only: regathered reads each element taken one by one within 4 of its diameters of the point at its value gathered once more at its centroid (radlab_answer::NearValues) |
+//! | `near_values` | solution | final-gather only: regathered reads each element taken one by one with a factor of at least 0.01 from the point (and seen from it) at its value gathered once more at its centroid (radlab_answer::NearValues) |
 //!
 //! **Point answers** (`reconstruction`, radlab_answer::reconstruction): `constant` is the element's value (plus the
 //! ambient term when on); `gouraud` interpolates vertex values over each face's leaf elements, anchoring the

@@ -24,7 +24,7 @@
 //! | `max_depth` | 100000 | reflections cap per particle |
 //! | `reconstruction` | gouraud | `constant`, `gouraud` or `final-gather` |
 //! | `gather_opening` | 0.25 | final-gather only: far groups of leaves through one drawn leaf each (radlab_answer::AnswerParams); 0 gathers every leaf |
-//! | `near_values` | solution | final-gather only: regathered reads each leaf taken one by one within 4 of its diameters of the point at its value gathered once more at its centroid (radlab_answer::NearValues) |
+//! | `near_values` | solution | final-gather only: regathered reads each leaf taken one by one with a factor of at least 0.01 from the point (and seen from it) at its value gathered once more at its centroid (radlab_answer::NearValues) |
 //!
 //! **Cost**: particles × about 1/(1 − ρ̄) flights (a ray each); rebuilding the rexes after each pass is
 //! O(landings × depth). Memory: 40 bytes per kept landing (its face parameters and power) and about 140 per

@@ -16,7 +16,8 @@
 //! | `transfer` | `alpha` | `isotropic` (A/4 clusters), `alpha` (normal cones; exact sums where a source straddles), `directional` (normal cones; spherical harmonics where a source straddles) |
 //! | `row_normalisation` | `off` | `closed-scenes`: in a closed scene, rescale each leaf's row of the operator to sum to one |
 //! | `straddle_angle` | `5` | the widest normal cone (half-angle, degrees) at which a cluster that a link straddles takes it whole by its faces' mean clamped cosine (α, directional); 0 hands every straddled link down to the faces |
-//! | every parameter of `hierarchical` but `lazy_linking` | as there | ε, oracle, schedule, α, stages, minimum element, visibility rays per link (also for cluster links), quadrature, tolerance, gather (patch links), leaf visibility (patch links), interpolation, memory budget |
+//! | `near_values` | `regathered` | final-gather only: each element the gather takes one by one with a factor of at least 0.01 from the point (and sees) read at its value gathered once more at its centroid (radlab_answer::NearValues; `solution` in `hierarchical`); `solution` reads the solution's values |
+//! | every other parameter of `hierarchical` but `lazy_linking` | as there | ε, oracle, schedule, α, stages, minimum element, visibility rays per link (also for cluster links), quadrature, tolerance, gather (patch links), leaf visibility (patch links), interpolation, memory budget |
 //!
 //! ## Transfers, side by side
 //! - `isotropic`: a cluster is a sphere of projected area A/4; O(1) per link. Biased: a flat cluster facing a
