@@ -96,8 +96,8 @@ pub struct AnswerParams {
     /// solution) or regathered (its value gathered once more at its centroid, at its first use, charged to
     /// answering: the solution's error there reaches the point damped by one more bounce). Default regathered
     /// for volume and face clusters, whose cluster-made values left the floor under scanned meshes 19–27% off
-    /// (13–14% with it), solution for the other methods, whose answers it moved by at most 0.07 points for 2–7
-    /// times the answering time (docs/defaults.md, docs/methods.md "Near values").
+    /// (13–14% with it), solution for the other methods, whose answers it moved by at most 0.03 points of mean
+    /// for 1.8–3.1 times the answering time (docs/defaults.md, docs/methods.md "Near values").
     pub near_values: NearValues,
 }
 
