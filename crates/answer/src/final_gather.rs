@@ -127,6 +127,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
+use crate::NearValues;
 use crate::gouraud::ElementValue;
 use crate::source_tree::{Leaf, Reached, SourceTree};
 use radlab_kernels::form_factor::{VisibilitySampling, point_polygon};
@@ -174,7 +175,7 @@ const TREE_STREAM: u64 = 0x7a3e_5b1c_d2f4_9e07;
 
 /// A near source's 4 × 4 sub-polygons, each with the centroids of its four quarters and the radiosity
 /// gathered at each.
-type NearValues = Box<[(Polygon, [(DVec3, Rgb); 4])]>;
+type SubPolygonValues = Box<[(Polygon, [(DVec3, Rgb); 4])]>;
 
 /// How a final gather estimates visibility, and its random seed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -429,7 +430,7 @@ pub struct FinalGather {
     /// Per source, its near-field reach and a sphere bounding it.
     reach: Vec<Reach>,
     /// Per source, its near-field sub-polygons with their radiosities, computed at the first near query.
-    near: Vec<OnceLock<NearValues>>,
+    near: Vec<OnceLock<SubPolygonValues>>,
     /// Per source, its value gathered once more at its centroid, at its first use ([`FinalGather::with_near_values`]);
     /// empty when near sources are read at their solution values.
     regathered: Vec<OnceLock<Rgb>>,
@@ -476,12 +477,15 @@ impl FinalGather {
         self.with_groups(opening, GROUP_SHARE)
     }
 
-    /// The same gather reading each source it takes one by one with a factor of at least
-    /// [`NEAR_VALUES_MIN_FACTOR`] from the point (seen from it, outside its near field; not an emitter, nor a
-    /// source with a sealed part) at its value gathered once more at its
-    /// centroid, computed at its first use (module documentation, "Near values").
-    pub fn with_near_values(mut self) -> Self {
-        self.regathered = (0..self.sources.len()).map(|_| OnceLock::new()).collect();
+    /// The same gather reading its near sources as `near` asks: with [`NearValues::Regathered`], each source it
+    /// takes one by one with a factor of at least [`NEAR_VALUES_MIN_FACTOR`] from the point (seen from it,
+    /// outside its near field; not an emitter, nor a source with a sealed part) at its value gathered once more
+    /// at its centroid, computed at its first use (module documentation, "Near values").
+    pub fn with_near_values(mut self, near: NearValues) -> Self {
+        self.regathered = match near {
+            NearValues::Solution => Vec::new(),
+            NearValues::Regathered => (0..self.sources.len()).map(|_| OnceLock::new()).collect(),
+        };
         self
     }
 
@@ -528,7 +532,7 @@ impl FinalGather {
     pub fn bytes(&self) -> usize {
         self.sources.capacity() * size_of::<(ElementValue, bool)>()
             + self.reach.capacity() * size_of::<Reach>()
-            + self.near.capacity() * size_of::<OnceLock<NearValues>>()
+            + self.near.capacity() * size_of::<OnceLock<SubPolygonValues>>()
             + self
                 .near
                 .iter()
@@ -597,7 +601,7 @@ impl FinalGather {
         accel: &Accel,
         j: usize,
         far_field: Option<&dyn FarField>,
-    ) -> NearValues {
+    ) -> SubPolygonValues {
         let src = &self.sources[j].0;
         let (c, n) = (src.polygon.centroid(), scene.faces[src.face].normal);
         let reach = NEAR_SET * src.polygon.diameter();
@@ -1567,7 +1571,8 @@ mod tests {
             .map(|f| whole_face(&scene, f))
             .collect();
         let plain = FinalGather::new(&scene, &els, GatherSettings::with_seed(3));
-        let near = FinalGather::new(&scene, &els, GatherSettings::with_seed(3)).with_near_values();
+        let near = FinalGather::new(&scene, &els, GatherSettings::with_seed(3))
+            .with_near_values(NearValues::Regathered);
         let queries: Vec<usize> = (0..scene.face_count()).step_by(7).collect();
         let mut below = 0;
         for &f in &queries {
@@ -1828,13 +1833,13 @@ mod tests {
     #[test]
     fn answers_do_not_depend_on_the_order_of_queries() {
         for opening in [0.0, 0.3] {
-            for near_values in [false, true] {
-                answers_do_not_depend_on_the_order_of_queries_at(opening, near_values);
+            for near in [NearValues::Solution, NearValues::Regathered] {
+                answers_do_not_depend_on_the_order_of_queries_at(opening, near);
             }
         }
     }
 
-    fn answers_do_not_depend_on_the_order_of_queries_at(opening: f64, near_values: bool) {
+    fn answers_do_not_depend_on_the_order_of_queries_at(opening: f64, near: NearValues) {
         let scene = builtin("cornell").expect("cornell");
         let accel = Accel::new(&scene);
         let mesh = ElementMesh::new(&scene, 110.0);
@@ -1850,9 +1855,9 @@ mod tests {
             })
             .collect();
         let gather = || {
-            let g =
-                FinalGather::new(&scene, &els, GatherSettings::with_seed(5)).with_opening(opening);
-            if near_values { g.with_near_values() } else { g }
+            FinalGather::new(&scene, &els, GatherSettings::with_seed(5))
+                .with_opening(opening)
+                .with_near_values(near)
         };
         let (forward, backward) = (gather(), gather());
         let a: Vec<Rgb> = points

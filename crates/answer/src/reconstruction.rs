@@ -269,10 +269,7 @@ impl Reconstructor {
                 let built = self.built.get_or_init(|| {
                     let gather = FinalGather::new(scene, &elements(), self.settings)
                         .with_opening(self.opening);
-                    Built::Gather(match self.near_values {
-                        NearValues::Solution => gather,
-                        NearValues::Regathered => gather.with_near_values(),
-                    })
+                    Built::Gather(gather.with_near_values(self.near_values))
                 });
                 match built {
                     Built::Gather(g) => g.radiosity_at(scene, accel, face, point),

@@ -78,6 +78,7 @@ use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
+use radlab_answer::NearValues;
 use radlab_answer::final_gather::{FarField, GatherSettings, NEAR_VALUES_MIN_FACTOR, query_key};
 use radlab_answer::gouraud::ElementValue;
 use radlab_kernels::form_factor::point_polygon;
@@ -177,7 +178,7 @@ pub struct ClusterGather {
     kernel_weighted_emitters: bool,
     /// Re-gathered values of faces and patch leaves near query points (`near_values = "regathered"`), `None` for
     /// the solution's values alone.
-    near: Option<NearValues>,
+    near: Option<RegatheredValues>,
     rays: AtomicU64,
     kernels: AtomicU64,
 }
@@ -296,10 +297,10 @@ impl ClusterGather {
         gather
     }
 
-    /// The same gather, with faces and patch leaves near a query point gathered with values re-gathered at
-    /// their centroids (`near_values = "regathered"`).
-    pub fn with_near_values(mut self) -> Self {
-        self.near = Some(NearValues {
+    /// The same gather reading near faces and patch leaves as `near` asks: with [`NearValues::Regathered`], at
+    /// values re-gathered at their centroids (module documentation).
+    pub fn with_near_values(mut self, near: NearValues) -> Self {
+        self.near = (near == NearValues::Regathered).then(|| RegatheredValues {
             faces: (0..self.face_radiosity.len())
                 .map(|_| OnceLock::new())
                 .collect(),
@@ -606,7 +607,7 @@ enum Pass {
 
 /// Values re-gathered at their first use, per face and per patch leaf of a split face (`near_values = "regathered"`).
 #[derive(Debug)]
-struct NearValues {
+struct RegatheredValues {
     faces: Vec<OnceLock<Rgb>>,
     leaves: HashMap<FaceId, Vec<OnceLock<Rgb>>>,
 }

@@ -593,15 +593,12 @@ impl<'a> FaceClusterSolver<'a> {
     fn near_field_answer(&self, face: FaceId, point: DVec3) -> Rgb {
         let tree = self.cluster_gather(DEFAULT_OPENING);
         let flat = self.flat.get_or_init(|| {
-            let flat = FinalGather::new(
+            FinalGather::new(
                 self.scene,
                 &tree.elements(self.scene),
                 GatherSettings::with_seed(self.seed),
-            );
-            match self.near_values {
-                NearValues::Solution => flat,
-                NearValues::Regathered => flat.with_near_values(),
-            }
+            )
+            .with_near_values(self.near_values)
         });
         let far = TreeFarField {
             gather: tree,
@@ -658,10 +655,7 @@ impl<'a> FaceClusterSolver<'a> {
                     self.seed,
                 ),
             };
-            match self.near_values {
-                NearValues::Solution => gather,
-                NearValues::Regathered => gather.with_near_values(),
-            }
+            gather.with_near_values(self.near_values)
         })
     }
 

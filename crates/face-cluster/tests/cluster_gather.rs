@@ -11,6 +11,7 @@ use common::{params, solve, try_params};
 use std::collections::HashMap;
 
 use glam::dvec3;
+use radlab_answer::NearValues;
 use radlab_answer::final_gather::NEAR_VALUES_MIN_FACTOR;
 use radlab_face_cluster::{
     ClusterGather, DEFAULT_OPENING, FaceClusterParams, FaceClusterSolver, FaceClusterTree,
@@ -192,12 +193,12 @@ fn near_values_are_a_second_gather_of_the_faces_near_the_point() {
         let ctx = context(&scene);
         let ones = vec![Rgb::ONE; scene.face_count()];
         let plain = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5);
-        let near =
-            ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5).with_near_values();
+        let near = ClusterGather::new(&ctx, ones.clone(), HashMap::new(), 0.0, 5)
+            .with_near_values(NearValues::Regathered);
         // Over gathered values (each ρ B₀ = 0.5) near faces read 0.25: every term halves.
         let twice_near =
             ClusterGather::regathered(&ctx, &accel, ones, HashMap::new(), (0.0, 0.0), 5)
-                .with_near_values();
+                .with_near_values(NearValues::Regathered);
         let queries: Vec<usize> = (0..scene.face_count()).step_by(5).collect();
         let mut strictly_between = 0;
         for &f in &queries {
