@@ -18,6 +18,8 @@ use radlab_scene::{FaceId, Polygon, Rgb, Scene};
 /// radiosity answered the Cornell box's contact shadows beside the blocks 22-30% off at their worst point (the
 /// element means there are those of strips 47 mm wide, lit parts and shadowed ones together), at 1/25 within
 /// 8-15% over three seeds, for about twice the time of matrix and progressive radiosity (docs/defaults.md).
+/// Matrix and mesh Monte Carlo radiosity's default; progressive radiosity's is 1/30 (its floors and walls,
+/// 2026-12-07).
 pub const DEFAULT_ELEMENT_SIZE_REL: f64 = 0.04;
 
 /// One element: a piece of an input face.
@@ -157,7 +159,16 @@ pub fn default_element_size(scene: &Scene) -> f64 {
 /// naming the `element_size` parameter, when that is not a positive finite length (the default of a
 /// degenerate scene, e.g. one whose bounding diagonal is zero or infinite).
 pub fn element_size(size: Option<f64>, scene: &Scene) -> Result<f64, SolveError> {
-    let size = size.unwrap_or_else(|| default_element_size(scene));
+    element_size_or(size, DEFAULT_ELEMENT_SIZE_REL, scene)
+}
+
+/// [`element_size`] for a method whose default is `default_rel` × the scene's bounding-box diagonal.
+pub fn element_size_or(
+    size: Option<f64>,
+    default_rel: f64,
+    scene: &Scene,
+) -> Result<f64, SolveError> {
+    let size = size.unwrap_or_else(|| default_rel * scene.diagonal());
     if size.is_finite() && size > 0.0 {
         Ok(size)
     } else {

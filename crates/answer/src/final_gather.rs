@@ -131,7 +131,7 @@ use crate::NearValues;
 use crate::gouraud::ElementValue;
 use crate::source_tree::{Leaf, Reached, SourceTree};
 use radlab_kernels::form_factor::{VisibilitySampling, point_polygon};
-use radlab_kernels::open_fraction::{DEFAULT_OPEN_RAYS, POINT_SEAL_RAYS, point_sealed};
+use radlab_kernels::open_fraction::{DEFAULT_OPEN_RAYS, POINT_SEAL_RAYS, point_key, point_sealed};
 use radlab_scene::sampling::{self, mix64};
 use radlab_scene::{FaceId, Polygon, Rgb, Scene};
 use radlab_visibility::{Accel, Segment};
@@ -407,22 +407,6 @@ pub trait FarField: Sync {
     fn irradiance(&self, face: FaceId, point: DVec3) -> Rgb;
 }
 
-/// The random stream of a query: a hash of the face and of the point's coordinates along two of the face's
-/// edges in units of those edges, quantised to 2^-30, so the stream (and the answer) does not change when the
-/// scene is scaled.
-pub fn query_key(scene: &Scene, face: FaceId, point: DVec3) -> u64 {
-    let poly = scene.polygon(face);
-    let v = poly.vertices();
-    let d = point - v[0];
-    let q = |e: DVec3| {
-        let l2 = e.length_squared();
-        let t = if l2 > 0.0 { d.dot(e) / l2 } else { 0.0 };
-        (t * (1u64 << 30) as f64).round() as i64 as u64
-    };
-    let (a, b) = (q(v[1] - v[0]), q(v[v.len() - 1] - v[0]));
-    mix64(a ^ mix64(b ^ mix64(face as u64)))
-}
-
 /// A solution's source elements, ready to gather from.
 #[derive(Debug)]
 pub struct FinalGather {
@@ -562,7 +546,7 @@ impl FinalGather {
             return Rgb::splat(f64::NAN);
         }
         // The query's own key (scale-free: the answer does not change when the scene is scaled).
-        let key = query_key(scene, face, point);
+        let key = point_key(scene, face, point);
         let (sealed, mut rays) = point_sealed(
             scene,
             accel,
@@ -619,7 +603,7 @@ impl FinalGather {
             })
             .collect();
         let near: Vec<usize> = (0..is_near.len()).filter(|&i| is_near[i]).collect();
-        let key = query_key(scene, src.face, c);
+        let key = point_key(scene, src.face, c);
         // The 64 quarters, and for a source with a sealed part (open < 1) which of their centroids are
         // sealed (the element's own probe: radlab-kernels' point test with as many rays).
         let subs: Vec<(Polygon, [Polygon; 4])> = src
@@ -642,7 +626,7 @@ impl FinalGather {
                             q,
                             DEFAULT_OPEN_RAYS,
                             self.settings.seed,
-                            key ^ mix64(query_key(scene, src.face, q)),
+                            key ^ mix64(point_key(scene, src.face, q)),
                         );
                         rays += probe;
                         sealed
@@ -776,7 +760,7 @@ impl FinalGather {
                     }
                     let mut r = sampling::rng(
                         self.settings.seed,
-                        key ^ mix64(query_key(scene, src.face, q)),
+                        key ^ mix64(point_key(scene, src.face, q)),
                     );
                     let (mut t, mut f_sum) = (Rgb::ZERO, 0.0);
                     for &i in &near {
@@ -841,7 +825,7 @@ impl FinalGather {
         if rho.max_element() <= 0.0 {
             return e;
         }
-        let key = query_key(scene, face, point);
+        let key = point_key(scene, face, point);
         let mut sum = Rgb::ZERO;
         let query = (face, point, n, in_gap, near_values);
         match &self.tree {
@@ -961,7 +945,7 @@ impl FinalGather {
             c,
             POINT_SEAL_RAYS,
             self.settings.seed,
-            query_key(scene, src.face, c),
+            point_key(scene, src.face, c),
         );
         let mut kernels = 0;
         let b = if sealed || rays > 1 {
@@ -1514,7 +1498,7 @@ mod tests {
         impl FarField for EverySource<'_> {
             fn irradiance(&self, face: FaceId, point: DVec3) -> Rgb {
                 let n = self.scene.faces[face].normal;
-                let key = query_key(self.scene, face, point);
+                let key = point_key(self.scene, face, point);
                 let mut rays = 0;
                 let mut sum = Rgb::ZERO;
                 for (i, (s, emits)) in self.gather.sources.iter().enumerate() {

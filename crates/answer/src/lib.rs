@@ -16,7 +16,10 @@ pub mod reconstruction;
 pub mod render;
 mod source_tree;
 
-pub use elements::{Element, ElementMesh, default_element_size, element_size};
+pub use elements::{
+    DEFAULT_ELEMENT_SIZE_REL, Element, ElementMesh, default_element_size, element_size,
+    element_size_or,
+};
 pub use locate::{ElementLocator, ElementTree};
 pub use reconstruction::{
     AnswerParams, DEFAULT_GATHER_OPENING, NearValues, Reconstruction, Reconstructor,

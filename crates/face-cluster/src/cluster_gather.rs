@@ -79,7 +79,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 use radlab_answer::NearValues;
-use radlab_answer::final_gather::{FarField, GatherSettings, NEAR_VALUES_MIN_FACTOR, query_key};
+use radlab_answer::final_gather::{FarField, GatherSettings, NEAR_VALUES_MIN_FACTOR};
 use radlab_answer::gouraud::ElementValue;
 use radlab_kernels::form_factor::point_polygon;
 use radlab_kernels::open_fraction::{POINT_SEAL_RAYS, point_key, point_sealed};
@@ -391,7 +391,7 @@ impl ClusterGather {
     ) -> Rgb {
         let (tree, scene, centroid) = (&ctx.tree, ctx.scene, &ctx.centroid);
         let n = scene.faces[face].normal;
-        let key = query_key(scene, face, point);
+        let key = point_key(scene, face, point);
         let mut r = sampling::rng(self.settings.seed, key ^ mix64(u64::MAX));
         let (mut rays, mut kernels) = (0u64, 0u64);
         let mut sum = Rgb::ZERO;
@@ -560,7 +560,7 @@ impl ClusterGather {
             c,
             POINT_SEAL_RAYS,
             self.settings.seed,
-            point_key(f, c),
+            point_key(scene, f, c),
         );
         self.rays.fetch_add(seal_rays, Ordering::Relaxed);
         if sealed || seal_rays > 1 {

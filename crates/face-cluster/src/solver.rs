@@ -688,7 +688,7 @@ impl Solution for FaceClusterSolver<'_> {
         if self.gather_opening.is_some() && self.near_field == NearField::SubPolygons {
             return self.near_field_answer(face, point);
         }
-        let key = point_key(face, point);
+        let key = point_key(self.scene, face, point);
         let (sealed, seal_rays) = point_sealed(
             self.scene,
             self.accel,

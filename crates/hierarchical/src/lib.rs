@@ -12,7 +12,7 @@
 //!
 //! | name | default | meaning |
 //! |---|---|---|
-//! | `epsilon` | 0.01 | refinement threshold on the oracle's estimate (dimensionless) |
+//! | `epsilon` | 0.0075 | refinement threshold on the oracle's estimate (dimensionless; `params::DEFAULT_EPSILON`) |
 //! | `oracle` | `variation` | `f` (max(F_rs, F_sr)), `bf` (ρ_r B_s/B̄ × that, B̄ the area-mean radiosity), `variation` (spread of kernel samples × ρ_r B_s/B̄) |
 //! | `error_norm` | `radiosity` | `radiosity` (the estimate as is) or `power` (× A_r / A_scene: the power a link brings) |
 //! | `schedule` | `scheduled` | `two-stage`, `interleaved`, `scheduled` (Willmott 2000, §2.4.3) |

@@ -178,13 +178,20 @@ pub fn point_sealed(
     (true, u64::from(rays))
 }
 
-/// A key for [`point_sealed`] from a point's face and coordinates (the same point, the same stream).
-pub fn point_key(face: FaceId, y: glam::DVec3) -> u64 {
-    let mut k = mix64(face as u64 ^ 0x706f_696e_745f_6b65);
-    for c in y.to_array() {
-        k = mix64(k ^ c.to_bits());
-    }
-    k
+/// The key of a point's random streams (its seal test, [`point_sealed`]; a final gather's rays): a hash of its
+/// face and of its coordinates along two of the face's edges in units of those edges, quantised to 2^-30, so the
+/// streams (and the answers) do not change when the scene is scaled.
+pub fn point_key(scene: &Scene, face: FaceId, y: glam::DVec3) -> u64 {
+    let poly = scene.polygon(face);
+    let v = poly.vertices();
+    let d = y - v[0];
+    let q = |e: glam::DVec3| {
+        let l2 = e.length_squared();
+        let t = if l2 > 0.0 { d.dot(e) / l2 } else { 0.0 };
+        (t * (1u64 << 30) as f64).round() as i64 as u64
+    };
+    let (a, b) = (q(v[1] - v[0]), q(v[v.len() - 1] - v[0]));
+    mix64(a ^ mix64(b ^ mix64(face as u64)))
 }
 
 /// The measured open shares of `elements` (each given as its polygon and face by `part`; 0: no probe point
@@ -255,6 +262,45 @@ mod tests {
     }
 
     #[test]
+    fn point_keys_follow_the_point_on_its_face_not_the_scene_scale() {
+        // The same floor at two scales and offsets: a point at the same place on it keys the same stream
+        // (so seal tests and gathers answer the same), and other points other streams.
+        let floor = |s: f64, o: f64| {
+            let mut b = SceneBuilder::new("floor");
+            let m = b
+                .add_material(
+                    Material::new("grey", DVec3::splat(0.5), DVec3::ZERO).expect("material"),
+                )
+                .expect("add");
+            let p = |x: f64, z: f64| DVec3::new(o + s * x, o, o + s * z);
+            b.add_polygon_points(
+                &[p(0.0, 0.0), p(0.0, 2.0), p(2.0, 2.0), p(2.0, 0.0)],
+                m,
+                "floor",
+            )
+            .expect("floor");
+            b.build().expect("scene")
+        };
+        let (a, b) = (floor(1.0, 0.0), floor(1e4, -3.0));
+        let at = |s: f64, o: f64, x: f64, z: f64| DVec3::new(o + s * x, o, o + s * z);
+        for (x, z) in [(0.3, 1.7), (1.0, 1.0), (1.999, 0.001)] {
+            assert_eq!(
+                point_key(&a, 0, at(1.0, 0.0, x, z)),
+                point_key(&b, 0, at(1e4, -3.0, x, z)),
+                "({x}, {z})"
+            );
+        }
+        assert_ne!(
+            point_key(&a, 0, at(1.0, 0.0, 0.3, 1.7)),
+            point_key(&a, 0, at(1.0, 0.0, 1.7, 0.3))
+        );
+        assert_ne!(
+            point_key(&a, 0, at(1.0, 0.0, 0.3, 1.7)),
+            point_key(&a, 0, at(1.0, 0.0, 0.3, 1.7 + 1e-6))
+        );
+    }
+
+    #[test]
     fn the_covered_share_of_a_floor_is_sealed() {
         // The panel covers x < 0.5 of the floor [0, 2] a millimetre above it: the floor as one element is a
         // quarter sealed; 16 points on a 4 × 4 grid resolve x < 0.5 exactly (one column of points).
@@ -281,8 +327,15 @@ mod tests {
         let accel = Accel::new(&scene);
         for x in [0.05, 0.25, 0.45] {
             let y = DVec3::new(x, 0.0, 1.0);
-            let (sealed, rays) =
-                point_sealed(&scene, &accel, 0, y, POINT_SEAL_RAYS, 7, point_key(0, y));
+            let (sealed, rays) = point_sealed(
+                &scene,
+                &accel,
+                0,
+                y,
+                POINT_SEAL_RAYS,
+                7,
+                point_key(&scene, 0, y),
+            );
             assert!(sealed, "x = {x}");
             assert_eq!(rays, u64::from(POINT_SEAL_RAYS));
         }
@@ -298,7 +351,7 @@ mod tests {
                 y,
                 POINT_SEAL_RAYS,
                 7,
-                point_key(face, y),
+                point_key(&scene, face, y),
             );
             assert!(!sealed, "{y}");
             assert!(rays <= 4, "{rays} rays at {y}");
@@ -315,7 +368,16 @@ mod tests {
         assert!(scene.faces[1].normal.y < 0.0);
         let at = |x: f64| {
             let y = DVec3::new(x, 0.0, 1.0);
-            point_sealed(&scene, &accel, 0, y, POINT_SEAL_RAYS, 7, point_key(0, y)).0
+            point_sealed(
+                &scene,
+                &accel,
+                0,
+                y,
+                POINT_SEAL_RAYS,
+                7,
+                point_key(&scene, 0, y),
+            )
+            .0
         };
         assert!(at(0.25) && at(0.45));
         assert!(!at(0.55) && !at(1.5));
@@ -333,7 +395,16 @@ mod tests {
         let accel = Accel::new(&scene);
         let at = |x: f64, z: f64| {
             let y = DVec3::new(x, 0.0, z);
-            point_sealed(&scene, &accel, 0, y, POINT_SEAL_RAYS, 7, point_key(0, y)).0
+            point_sealed(
+                &scene,
+                &accel,
+                0,
+                y,
+                POINT_SEAL_RAYS,
+                7,
+                point_key(&scene, 0, y),
+            )
+            .0
         };
         for x in [0.05, 0.15, 0.25, 0.35, 0.45] {
             for z in [0.3, 0.7, 1.1, 1.5] {

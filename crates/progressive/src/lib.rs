@@ -36,7 +36,7 @@
 //!
 //! | name | default | meaning |
 //! |---|---|---|
-//! | `element_size` | 1/25 of the scene's bounding diagonal | receiving element size (longest edge, scene units) |
+//! | `element_size` | 1/30 of the scene's bounding diagonal (`params::DEFAULT_ELEMENT_SIZE_REL`) | receiving element size (longest edge, scene units) |
 //! | `patch_size` | `element_size` | shooting patch size; larger shoots from patches of several elements (substructuring) |
 //! | `shots_per_step` | 1 | shots per `step()`; changes only the granularity, never the answer |
 //! | `visibility` | `jittered4x4` | visibility between element and an emitting shooter (direct light): `unoccluded`, `centre`, `jittered2x2`, `jittered4x4` (16 rays), `jittered8x8` |

@@ -1,17 +1,23 @@
 //! Parameters of progressive radiosity, their documented defaults and range checks.
 //!
 //! Every length is in scene units and every default is relative to the scene's bounding-box diagonal
-//! (through [`radlab_answer::default_element_size`]), so the same defaults mesh a 1 mm box and a 100 m hall
+//! ([`DEFAULT_ELEMENT_SIZE_REL`]), so the same defaults mesh a 1 mm box and a 100 m hall
 //! alike. The adaptive threshold is a relative radiosity contrast and the stopping rule a fraction of the
 //! emitted power, so neither depends on the scene's scale or on its light's strength.
 
-use radlab_answer::{AnswerParams, Reconstruction, element_size};
+use radlab_answer::{AnswerParams, Reconstruction, element_size_or};
 use radlab_kernels::form_factor::VisibilitySampling;
 use radlab_method::{MethodParams, SolveError};
 use radlab_scene::Scene;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+/// Default element size as a fraction of the scene's bounding-box diagonal: 1/30, finer than matrix and mesh Monte
+/// Carlo radiosity's 1/25 ([`radlab_answer::DEFAULT_ELEMENT_SIZE_REL`]). At 1/25 the Cornell box's floors and
+/// walls answered 12% off at their worst point (the back wall a millimetre above the floor; 6% and 8% at seeds 2
+/// and 3, as the order of equal shots moves it), at 1/30 8%, 5% and 8%, for 1.7 times the time there; the
+/// furnished room takes about as long either way (docs/defaults.md).
+pub const DEFAULT_ELEMENT_SIZE_REL: f64 = 1.0 / 30.0;
 /// Default shooting patch size as a multiple of the element size: 1, every element shoots its own radiosity (no
 /// substructuring). With patches of 2 × 2 elements (2, the default until 2026-12-06) a patch shot its mean
 /// uniformly, and a receiver close to a patch with a shadow across it saw that mean: the furnished room's floor
@@ -51,7 +57,8 @@ pub enum Overshoot {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ProgressiveParams {
-    /// Receiving element size (longest edge, scene units); unset: 1/25 of the scene's bounding diagonal.
+    /// Receiving element size (longest edge, scene units); unset: 1/30 of the scene's bounding diagonal
+    /// ([`DEFAULT_ELEMENT_SIZE_REL`]).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub element_size: Option<f64>,
     /// Shooting patch size (scene units), at least element_size; larger shoots from patches of several
@@ -163,7 +170,7 @@ impl ProgressiveParams {
     /// The lengths for `scene`, checked against each other.
     pub(crate) fn resolve(&self, scene: &Scene) -> Result<Resolved, SolveError> {
         self.validate()?;
-        let element_size = element_size(self.element_size, scene)?;
+        let element_size = element_size_or(self.element_size, DEFAULT_ELEMENT_SIZE_REL, scene)?;
         let patch_size = self
             .patch_size
             .unwrap_or(DEFAULT_PATCH_FACTOR * element_size);
@@ -207,7 +214,6 @@ impl MethodParams for ProgressiveParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use radlab_answer::default_element_size;
 
     fn pairs(kv: &[(&str, &str)]) -> Vec<(String, String)> {
         kv.iter()
@@ -274,7 +280,7 @@ mod tests {
     fn lengths_resolve_against_each_other() {
         let scene = radlab_scene::builtin("furnace-cube").expect("scene");
         let r = ProgressiveParams::default().resolve(&scene).expect("ok");
-        assert!((r.element_size - default_element_size(&scene)).abs() < 1e-15);
+        assert!((r.element_size - DEFAULT_ELEMENT_SIZE_REL * scene.diagonal()).abs() < 1e-15);
         assert!((r.patch_size - DEFAULT_PATCH_FACTOR * r.element_size).abs() < 1e-15);
         assert!((r.min_element_size - 0.25 * r.element_size).abs() < 1e-15);
         let p = ProgressiveParams {

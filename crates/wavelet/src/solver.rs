@@ -164,7 +164,7 @@ impl Solution for WaveletSolver<'_> {
                 .and_then(|i| e.open_shares().get(i as usize).copied())
                 .is_some_and(|o| o < 1.0);
             if partly_sealed && face < self.scene.face_count() {
-                let key = point_key(face, point);
+                let key = point_key(self.scene, face, point);
                 if point_sealed(self.scene, self.accel, face, point, POINT_SEAL_RAYS, self.seed, key).0 {
                     return self.scene.emission(face);
                 }

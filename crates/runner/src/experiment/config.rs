@@ -53,8 +53,10 @@ pub struct Evaluation {
     /// Evaluate the error after every `every`-th step (the last step is always evaluated).
     pub every: u64,
     /// Evaluate only once the solving time has grown by this factor since the last evaluation (default
-    /// 1.25; 1 = at every `every`-th step). Keeps the number of evaluations logarithmic in the run's length,
-    /// which matters when answering is costly (final gather) or steps are many (progressive shots).
+    /// 1.25; 1 = at every `every`-th step), and, for a factor above 1, by at least the last evaluation's
+    /// answering time. Keeps the number of evaluations logarithmic in the run's length, which matters when
+    /// steps are many (progressive shots), and evaluating from taking more of a run's time than solving, which
+    /// matters when answering is costly (a final gather on a heap of small faces).
     pub growth: f64,
 }
 

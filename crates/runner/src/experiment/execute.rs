@@ -344,6 +344,18 @@ struct Answering {
     bytes: u64,
 }
 
+/// The solving time at which the next evaluation is due, after one at `wall` seconds of solving whose answering
+/// took `answer_s`: once that time has grown by `growth` and, for `growth` > 1, by at least the answering time,
+/// so that evaluating (a final gather at every point can take longer than the steps) takes no more of a run's
+/// time than solving does. `growth` = 1 evaluates at every eligible step.
+fn next_evaluation(wall: f64, growth: f64, answer_s: f64) -> f64 {
+    if growth > 1.0 {
+        (wall * growth).max(wall + answer_s)
+    } else {
+        wall
+    }
+}
+
 /// Writes a run's final answers at the evaluation points beside the reference (`runs/<id>.points.csv`).
 fn write_points(
     path: &Path,
@@ -461,7 +473,7 @@ fn execute_inner(job: &Job, result: &mut RunResult) -> Result<()> {
             last_answer = answering;
             last_values = values;
             trace.push(row(spec, rec, setup_s, last_eval, last_answer));
-            next_eval = wall * growth;
+            next_eval = next_evaluation(wall, growth, last_answer.secs);
             if job.limits.isolate {
                 record(&mut partial, rec, last_eval, last_answer, s);
                 partial.peak_rss_bytes = solve_loop::peak_rss_bytes().unwrap_or(0);
@@ -773,6 +785,16 @@ pub fn execute_isolated(job: &Job, threads: Option<usize>) -> Result<RunResult> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn evaluations_wait_for_as_much_solving_as_their_answering_took() {
+        // Cheap answers: the solving time's growth alone decides.
+        assert_eq!(next_evaluation(8.0, 1.25, 0.5), 10.0);
+        // Costly answers (a 75 s pass after 8 s of steps): the next evaluation waits for 75 s more of solving.
+        assert_eq!(next_evaluation(8.0, 1.25, 75.0), 83.0);
+        // Growth 1 evaluates at every eligible step, however costly.
+        assert_eq!(next_evaluation(8.0, 1.0, 75.0), 8.0);
+    }
 
     #[test]
     fn jobs_reach_the_child_bit_for_bit() {
