@@ -242,7 +242,7 @@ fn substructuring_table(scene: &Scene, accel: &Accel) {
     );
     eprintln!("variant,elements,patches,shots,seconds,rel_l1_error");
     let d = ProgressiveParams::default();
-    let es = default_element_size(scene);
+    let es = radlab_progressive::params::default_element_size(scene);
     let variants: Vec<(&str, ProgressiveParams)> = vec![
         ("defaults", d.clone()),
         (
@@ -453,9 +453,10 @@ fn main() {
     let scene = builtin("cornell").expect("cornell");
     let accel = Accel::new(&scene);
     eprintln!(
-        "Cornell box: {} faces, diagonal {:.1}, default element size {:.2}, {} rayon threads",
+        "Cornell box: {} faces, diagonal {:.1}, default element size {:.2} (matrix: {:.2}), {} rayon threads",
         scene.face_count(),
         scene.diagonal(),
+        radlab_progressive::params::default_element_size(&scene),
         default_element_size(&scene),
         rayon::current_num_threads()
     );

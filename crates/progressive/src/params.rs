@@ -18,6 +18,12 @@ use serde::{Deserialize, Serialize};
 /// and 3, as the order of equal shots moves it), at 1/30 8%, 5% and 8%, for 1.7 times the time there; the
 /// furnished room takes about as long either way (docs/defaults.md).
 pub const DEFAULT_ELEMENT_SIZE_REL: f64 = 1.0 / 30.0;
+
+/// Progressive radiosity's default element size for `scene`: [`DEFAULT_ELEMENT_SIZE_REL`] × its bounding-box
+/// diagonal.
+pub fn default_element_size(scene: &Scene) -> f64 {
+    DEFAULT_ELEMENT_SIZE_REL * scene.diagonal()
+}
 /// Default shooting patch size as a multiple of the element size: 1, every element shoots its own radiosity (no
 /// substructuring). With patches of 2 × 2 elements (2, the default until 2026-12-06) a patch shot its mean
 /// uniformly, and a receiver close to a patch with a shadow across it saw that mean: the furnished room's floor
@@ -280,7 +286,7 @@ mod tests {
     fn lengths_resolve_against_each_other() {
         let scene = radlab_scene::builtin("furnace-cube").expect("scene");
         let r = ProgressiveParams::default().resolve(&scene).expect("ok");
-        assert!((r.element_size - DEFAULT_ELEMENT_SIZE_REL * scene.diagonal()).abs() < 1e-15);
+        assert!((r.element_size - default_element_size(&scene)).abs() < 1e-15);
         assert!((r.patch_size - DEFAULT_PATCH_FACTOR * r.element_size).abs() < 1e-15);
         assert!((r.min_element_size - 0.25 * r.element_size).abs() < 1e-15);
         let p = ProgressiveParams {
